@@ -1,0 +1,39 @@
+// semslam: visual semantic SLAM with landmarks. See README.md and `semslam <command> --help`.
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <exception>
+
+#include "commands.h"
+#include "semslam/core/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"semslam: visual semantic SLAM with landmarks for large-scale outdoor driving"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "semslam 0.1.0");
+  bool verbose = false;
+  app.add_flag("-v,--verbose", verbose, "Log debug messages");
+  app.parse_complete_callback([&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
+  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+
+  semslam::cli::AddSynthCommand(app);
+  semslam::cli::AddEvalCommand(app);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const semslam::InputError& e) {
+    std::fprintf(stderr, "semslam: input error: %s\n", e.what());
+    return 1;
+  } catch (const semslam::InvalidArgument& e) {
+    std::fprintf(stderr, "semslam: invalid argument: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "semslam: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,34 @@
+# Compile options shared by every semslam target (libraries, CLI, tests, benchmarks).
+add_library(semslam_options INTERFACE)
+target_compile_features(semslam_options INTERFACE cxx_std_20)
+target_compile_options(semslam_options INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor -Wcast-align -Woverloaded-virtual
+  -Wimplicit-fallthrough -Wno-missing-field-initializers)
+# Eigen's fixed-size vectorization needs aligned allocation; C++17 aligned new covers it.
+target_compile_definitions(semslam_options INTERFACE EIGEN_MPL2_ONLY)
+if(SEMSLAM_WERROR)
+  target_compile_options(semslam_options INTERFACE -Werror)
+endif()
+if(SEMSLAM_NATIVE)
+  # AVX2/FMA/POPCNT (x86-64-v3) where the build machine has them. Not -march=native: GCC 12 warns
+  # spuriously inside its AVX-512 intrinsics when Eigen uses them.
+  file(READ /proc/cpuinfo cpuinfo LIMIT 65536)
+  if(cpuinfo MATCHES " avx2 " AND cpuinfo MATCHES " fma " AND cpuinfo MATCHES " bmi2 ")
+    target_compile_options(semslam_options INTERFACE -march=x86-64-v3)
+  endif()
+endif()
+if(SEMSLAM_SANITIZE)
+  target_compile_options(semslam_options INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer
+                                                   -fno-sanitize-recover=undefined)
+  target_link_options(semslam_options INTERFACE -fsanitize=address,undefined)
+endif()
+
+# semslam_module(NAME SOURCES... DEPS...) declares one library per folder: semslam_<NAME>.
+function(semslam_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(semslam_${name} STATIC ${ARG_SOURCES})
+  add_library(semslam::${name} ALIAS semslam_${name})
+  target_include_directories(semslam_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  target_link_libraries(semslam_${name} PUBLIC ${ARG_DEPS} PRIVATE semslam_options)
+  set_target_properties(semslam_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()

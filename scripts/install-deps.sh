@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# The one place semslam's Debian (bookworm) dependencies are listed.
+# Idempotent: installs only the packages that are missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config ccache git
+  libopencv-dev
+  libeigen3-dev
+  libceres-dev
+  libgeographiclib-dev
+  nlohmann-json3-dev
+  libcli11-dev
+  libspdlog-dev libfmt-dev
+  libyaml-cpp-dev
+  libtbb-dev
+  libnanoflann-dev
+  libboost-graph-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libosmium2-dev zlib1g-dev libexpat1-dev libbz2-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${#missing[@]} missing package(s): ${missing[*]}"
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"

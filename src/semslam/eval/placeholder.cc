@@ -1,0 +1,1 @@
+// Replaced as the eval module is implemented.

@@ -1,0 +1,58 @@
+#pragma once
+// KITTI raw drives: image_0x/data/%010d.png with timestamps.txt, oxts/data/%010d.txt (30 fields) with
+// timestamps.txt, and the date's calib_cam_to_cam.txt, calib_imu_to_velo.txt, calib_velo_to_cam.txt.
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "semslam/core/error.h"
+#include "semslam/geometry/eigen_types.h"
+#include "semslam/geometry/rigid3.h"
+
+namespace semslam {
+
+// One OXTS reading, in the field order of KITTI's dataformat.txt.
+struct OxtsRecord {
+  double lat = 0, lon = 0, alt = 0;           // deg, deg, m
+  double roll = 0, pitch = 0, yaw = 0;        // rad
+  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;  // m/s (north, east, forward, left, up)
+  double ax = 0, ay = 0, az = 0, af = 0, al = 0, au = 0;  // m/s^2
+  double wx = 0, wy = 0, wz = 0, wf = 0, wl = 0, wu = 0;  // rad/s
+  double pos_accuracy = 0, vel_accuracy = 0;  // m, m/s
+  int navstat = 0, numsats = 0, posmode = 0, velmode = 0, orimode = 0;
+
+  static constexpr int kNumFields = 30;
+};
+
+// Parses one oxts line of 30 whitespace-separated values.
+OxtsRecord ParseOxtsLine(const std::string& line, const SourceLocation& where);
+std::string FormatOxtsLine(const OxtsRecord& record);
+
+// KITTI raw timestamps ("2011-09-26 13:02:25.964389445") as seconds since the Unix epoch (UTC).
+std::vector<double> ReadKittiRawTimestamps(const std::filesystem::path& path);
+void WriteKittiRawTimestamps(const std::filesystem::path& path, const std::vector<double>& unix_seconds);
+
+struct StampedOxts {
+  double timestamp = 0.0;  // seconds since the Unix epoch
+  OxtsRecord record;
+};
+// Reads oxts_dir/timestamps.txt and oxts_dir/data/%010d.txt. A missing data file is an error.
+std::vector<StampedOxts> ReadOxtsFolder(const std::filesystem::path& oxts_dir);
+void WriteOxtsFolder(const std::filesystem::path& oxts_dir, const std::vector<StampedOxts>& readings);
+
+// calib_cam_to_cam.txt (K_0x, D_0x, R_0x, T_0x, S_rect_0x, R_rect_0x, P_rect_0x, ...): every key as its numbers.
+struct KittiRawCalibFile {
+  std::map<std::string, std::vector<double>> values;
+  // The numbers under `key`, requiring exactly `count` of them; throws InputError naming the file and key.
+  std::vector<double> Get(const std::string& key, size_t count) const;
+  std::filesystem::path file;
+};
+KittiRawCalibFile ReadKittiRawCalibFile(const std::filesystem::path& path);
+
+// Rigid transforms from calib_imu_to_velo.txt / calib_velo_to_cam.txt (R: 9 numbers, T: 3).
+Rigid3d ReadKittiRawRigid(const std::filesystem::path& path);  // velo_from_imu or cam_from_velo
+
+}  // namespace semslam

@@ -1,0 +1,1 @@
+// Replaced as the io module is implemented.

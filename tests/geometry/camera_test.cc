@@ -1,0 +1,83 @@
+#include "semslam/geometry/camera.h"
+
+#include <gtest/gtest.h>
+
+#include "semslam/core/error.h"
+
+namespace semslam {
+namespace {
+
+PinholeCamera KittiLike() {
+  PinholeCamera c;
+  c.width = 1241;
+  c.height = 376;
+  c.fx = c.fy = 718.856;
+  c.cx = 607.1928;
+  c.cy = 185.2157;
+  return c;
+}
+
+TEST(PinholeCamera, ProjectsKnownPoint) {
+  const PinholeCamera c = KittiLike();
+  // 1 m right, 0.5 m down, 10 m ahead: u = 718.856 * 0.1 + 607.1928, v = 718.856 * 0.05 + 185.2157.
+  const Eigen::Vector2d uv = c.Project({1.0, 0.5, 10.0});
+  EXPECT_NEAR(uv.x(), 679.0784, 1e-9);
+  EXPECT_NEAR(uv.y(), 221.1585, 1e-9);
+}
+
+TEST(PinholeCamera, UnprojectInvertsProject) {
+  const PinholeCamera c = KittiLike();
+  const Eigen::Vector3d p(-3.0, 1.2, 17.0);
+  const Eigen::Vector2d uv = c.Project(p);
+  EXPECT_TRUE(c.Unproject(uv).isApprox(p.normalized(), 1e-12));
+  EXPECT_TRUE(c.UnprojectDepth(uv, 17.0).isApprox(p, 1e-12));
+}
+
+TEST(PinholeCamera, DistortionRoundTrip) {
+  PinholeCamera c = KittiLike();
+  c.distortion = {-0.28, 0.07, 0.0002, -0.0001, 0.0};
+  const Eigen::Vector3d p(2.0, -1.0, 8.0);
+  const Eigen::Vector2d uv = c.Project(p);
+  EXPECT_GT((uv - KittiLike().Project(p)).norm(), 1.0);  // distortion moves the pixel
+  EXPECT_TRUE(c.UnprojectDepth(uv, 8.0).isApprox(p, 1e-9));
+}
+
+TEST(PinholeCamera, VisibilityChecksDepthAndBounds) {
+  const PinholeCamera c = KittiLike();
+  EXPECT_TRUE(c.ProjectIfVisible({0, 0, 5}).has_value());
+  EXPECT_FALSE(c.ProjectIfVisible({0, 0, -5}).has_value());
+  EXPECT_FALSE(c.ProjectIfVisible({100, 0, 5}).has_value());
+}
+
+TEST(PinholeCamera, CheckRejectsBadIntrinsics) {
+  PinholeCamera c = KittiLike();
+  EXPECT_NO_THROW(c.Check());
+  c.fx = -1;
+  EXPECT_THROW(c.Check(), InvalidArgument);
+  c = KittiLike();
+  c.width = 0;
+  EXPECT_THROW(c.Check(), InvalidArgument);
+}
+
+TEST(PinholeCamera, ScaledKeepsRaysOfPixelCentres) {
+  const PinholeCamera c = KittiLike();
+  const PinholeCamera half = c.Scaled(0.5);
+  const Eigen::Vector3d p(1.0, 2.0, 20.0);
+  // Pixel centres scale about the image corner: (u + 0.5) * s - 0.5.
+  const Eigen::Vector2d full = c.Project(p);
+  EXPECT_TRUE(half.Project(p).isApprox((full.array() + 0.5).matrix() * 0.5 - Eigen::Vector2d(0.5, 0.5), 1e-9));
+}
+
+TEST(StereoRig, DisparityAndDepthAgree) {
+  StereoRig rig{KittiLike(), 0.537};
+  const Eigen::Vector3d p(1.5, -0.3, 12.0);
+  const Eigen::Vector2d left = rig.left.Project(p);
+  const double disparity = left.x() - rig.ProjectRightU(p);
+  EXPECT_NEAR(disparity, 718.856 * 0.537 / 12.0, 1e-9);
+  EXPECT_TRUE(rig.Triangulate(left, disparity).isApprox(p, 1e-9));
+  rig.baseline = 0;
+  EXPECT_THROW(rig.Check(), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semslam
