@@ -18,8 +18,15 @@ int main(int argc, char** argv) {
   app.parse_complete_callback([&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
 
+  semslam::cli::AddDemoCommand(app);
   semslam::cli::AddSynthCommand(app);
+  semslam::cli::AddRunCommand(app);
+  semslam::cli::AddLocalizeCommand(app);
+  semslam::cli::AddRouteCommand(app);
   semslam::cli::AddEvalCommand(app);
+  semslam::cli::AddVocabCommand(app);
+  semslam::cli::AddSegmentCommand(app);
+  semslam::cli::AddBenchCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,1 @@
+// Placeholder until the landmarks module has sources.

@@ -1,0 +1,1 @@
+// Placeholder until the loop module has sources.

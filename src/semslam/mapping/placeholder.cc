@@ -1,0 +1,1 @@
+// Placeholder until the mapping module has sources.

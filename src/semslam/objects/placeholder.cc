@@ -1,0 +1,1 @@
+// Placeholder until the objects module has sources.

@@ -1,0 +1,1 @@
+// Placeholder until the semantics module has sources.

@@ -1,0 +1,1 @@
+// Placeholder until the system module has sources.

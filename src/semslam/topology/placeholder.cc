@@ -1,0 +1,1 @@
+// Placeholder until the topology module has sources.

@@ -1,0 +1,1 @@
+// Placeholder until the tracking module has sources.
