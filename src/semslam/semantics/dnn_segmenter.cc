@@ -1,0 +1,166 @@
+#include "semslam/semantics/dnn_segmenter.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <sstream>
+
+#include "semslam/core/error.h"
+
+namespace semslam {
+
+struct DnnSegmenter::Network {
+  cv::dnn::Net net;
+};
+
+void DnnSegmenterOptions::Check() const { Require(threads >= 0, "DnnSegmenter: threads must be >= 0"); }
+
+DnnSegmenter::DnnSegmenter(ModelCard card, Options options)
+    : card_(std::move(card)), options_(options), network_(std::make_unique<Network>()) {
+  card_.Check();
+  options_.Check();
+  if (!std::filesystem::is_regular_file(card_.file)) {
+    throw InputError(card_.file, "model file not found (model card '" + card_.name + "')");
+  }
+  try {
+    network_->net = card_.ResolvedFormat() == ModelCard::Format::kTorch
+                        ? cv::dnn::readNetFromTorch(card_.file.string())
+                        : cv::dnn::readNetFromONNX(card_.file.string());
+  } catch (const cv::Exception& e) {
+    throw InputError(card_.file, std::string("OpenCV dnn cannot load the model: ") + e.err);
+  }
+  if (network_->net.empty()) throw InputError(card_.file, "OpenCV dnn loaded an empty network");
+  network_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  network_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+}
+
+DnnSegmenter::~DnnSegmenter() = default;
+
+std::string DnnSegmenter::Describe() const {
+  std::ostringstream s;
+  s << "dnn " << card_.name << " (" << card_.file.string() << ", "
+    << (card_.ResolvedFormat() == ModelCard::Format::kTorch ? "torch" : "onnx") << ", input ";
+  if (card_.input_width > 0) {
+    s << card_.input_width << "x" << card_.input_height << (card_.fixed_size ? " fixed" : "");
+  } else {
+    s << "image size";
+  }
+  s << ")";
+  return s.str();
+}
+
+cv::Size DnnSegmenter::NetworkInputSize(cv::Size image_size) const {
+  if (card_.input_width > 0) return {card_.input_width, card_.input_height};
+  const auto round = [&](int v) {
+    const int d = card_.size_divisor;
+    return std::max(d, (v + d / 2) / d * d);
+  };
+  return {round(image_size.width), round(image_size.height)};
+}
+
+cv::Mat DnnSegmenter::Preprocess(const cv::Mat& image) const {
+  Require(!image.empty(), "DnnSegmenter: empty image");
+  Require(image.depth() == CV_8U, "DnnSegmenter: expected an 8-bit image");
+  cv::Mat bgr;
+  switch (image.channels()) {
+    case 1:
+      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+      break;
+    case 3:
+      bgr = image;
+      break;
+    case 4:
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+      break;
+    default:
+      throw InvalidArgument("DnnSegmenter: expected 1, 3 or 4 channels");
+  }
+  const cv::Size size = NetworkInputSize(image.size());
+  cv::Mat resized;
+  if (size == bgr.size()) {
+    resized = bgr;
+  } else {
+    const bool shrink = size.width < bgr.cols && size.height < bgr.rows;
+    cv::resize(bgr, resized, size, 0, 0, shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
+  }
+  cv::Mat ordered;
+  if (card_.rgb) {
+    cv::cvtColor(resized, ordered, cv::COLOR_BGR2RGB);
+  } else {
+    ordered = resized;
+  }
+  // x = (pixel * scale - mean) / std, channel by channel in the network's order.
+  cv::Mat normalized;
+  ordered.convertTo(normalized, CV_32FC3, card_.scale);
+  normalized -= cv::Scalar(card_.mean[0], card_.mean[1], card_.mean[2]);
+  cv::multiply(normalized, cv::Scalar(1.0 / card_.stddev[0], 1.0 / card_.stddev[1], 1.0 / card_.stddev[2]),
+               normalized);
+  return cv::dnn::blobFromImage(normalized, 1.0, cv::Size(), cv::Scalar(), false, false, CV_32F);
+}
+
+Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_index*/) {
+  const cv::Mat blob = Preprocess(image);
+  if (options_.threads > 0) cv::setNumThreads(options_.threads);
+  cv::Mat output;
+  try {
+    network_->net.setInput(blob);
+    output = card_.output_name.empty() ? network_->net.forward() : network_->net.forward(card_.output_name);
+  } catch (const cv::Exception& e) {
+    throw InputError(card_.file, std::string("forward pass failed: ") + e.err);
+  }
+  const size_t num_channels = card_.channel_to_train_id.size();
+  std::vector<int> shape(output.size.p, output.size.p + output.dims);
+  // Drop a leading batch dimension of 1.
+  if (!shape.empty() && shape.front() == 1 && shape.size() >= 3) shape.erase(shape.begin());
+  const auto describe = [&] {
+    std::string s;
+    for (int d : shape) s += (s.empty() ? "" : "x") + std::to_string(d);
+    return s;
+  };
+
+  if (card_.layout == ModelCard::Layout::kLabels) {
+    if (shape.size() == 3 && shape[0] == 1) shape.erase(shape.begin());
+    if (shape.size() != 2) {
+      throw InputError(card_.file, "label output of shape " + describe() + ", expected HxW");
+    }
+    cv::Mat indices(shape[0], shape[1], CV_32SC1);
+    cv::Mat(shape[0], shape[1], output.type(), output.data).convertTo(indices, CV_32SC1);
+    cv::Mat labels(indices.size(), CV_8UC1);
+    for (int y = 0; y < labels.rows; ++y) {
+      const int* in = indices.ptr<int>(y);
+      std::uint8_t* out = labels.ptr<std::uint8_t>(y);
+      for (int x = 0; x < labels.cols; ++x) {
+        out[x] = (in[x] >= 0 && static_cast<size_t>(in[x]) < num_channels)
+                     ? card_.channel_to_train_id[static_cast<size_t>(in[x])]
+                     : kNoLabel;
+      }
+    }
+    return Segmentation::FromLabels(labels, image.size(), 1.0f);
+  }
+
+  if (output.depth() != CV_32F || shape.size() != 3) {
+    throw InputError(card_.file, "output of shape " + describe() + ", expected 1xCxHxW or 1xHxWxC float scores");
+  }
+  std::vector<cv::Mat> planes;
+  if (card_.layout == ModelCard::Layout::kNchw) {
+    if (static_cast<size_t>(shape[0]) != num_channels) {
+      throw InputError(card_.file, "output has " + std::to_string(shape[0]) + " channels but the model card lists " +
+                                       std::to_string(num_channels) + " classes");
+    }
+    float* data = output.ptr<float>();
+    const size_t plane_size = static_cast<size_t>(shape[1]) * static_cast<size_t>(shape[2]);
+    for (size_t c = 0; c < num_channels; ++c) planes.emplace_back(shape[1], shape[2], CV_32FC1, data + c * plane_size);
+  } else {
+    if (static_cast<size_t>(shape[2]) != num_channels) {
+      throw InputError(card_.file, "output has " + std::to_string(shape[2]) + " channels but the model card lists " +
+                                       std::to_string(num_channels) + " classes");
+    }
+    cv::Mat interleaved(shape[0], shape[1], CV_32FC(static_cast<int>(num_channels)), output.ptr<float>());
+    cv::split(interleaved, planes);
+  }
+  return SegmentationFromScores(planes, card_.scores, card_.channel_to_train_id, image.size());
+}
+
+}  // namespace semslam

@@ -1,0 +1,43 @@
+#pragma once
+// A CNN through OpenCV's dnn module (CPU), described by a model card: Torch7 .net files (ENet) and ONNX exports
+// (PSPNet, BiSeNet, DDRNet, ...). Keeps the network's output resolution and maps it back to the input image.
+
+#include <memory>
+#include <string>
+
+#include "semslam/semantics/model_card.h"
+#include "semslam/semantics/segmenter.h"
+
+namespace semslam {
+
+struct DnnSegmenterOptions {
+  // OpenCV threads (cv::setNumThreads, process-wide) set before each forward pass; 0 leaves them alone.
+  int threads = 0;
+  void Check() const;
+};
+
+class DnnSegmenter : public Segmenter {
+ public:
+  using Options = DnnSegmenterOptions;
+
+  // Loads the network. Throws InputError naming the file when it is missing or OpenCV cannot read it.
+  explicit DnnSegmenter(ModelCard card, Options options = {});
+  ~DnnSegmenter() override;
+
+  std::string Describe() const override;
+  Segmentation Segment(const cv::Mat& image, std::int64_t frame_index = -1) override;
+
+  const ModelCard& card() const { return card_; }
+  // The network input size used for an image of `image_size`.
+  cv::Size NetworkInputSize(cv::Size image_size) const;
+  // The preprocessed NCHW float blob for an image (exposed for tests).
+  cv::Mat Preprocess(const cv::Mat& image) const;
+
+ private:
+  ModelCard card_;
+  Options options_;
+  struct Network;  // the cv::dnn::Net, kept out of this header
+  std::unique_ptr<Network> network_;
+};
+
+}  // namespace semslam

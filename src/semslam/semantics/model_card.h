@@ -1,0 +1,77 @@
+#pragma once
+// A model card: how to feed a segmentation network and read its output, as a small YAML file.
+//
+//   name: enet-cityscapes
+//   file: ${SEMSLAM_SHARED_DATA:-../../shared/data}/enet_cityscapes_torch/enet-model.net  # relative to the card
+//   format: torch              # torch | onnx | auto (by extension: .net/.t7 torch, .onnx onnx)
+//   input:
+//     width: 1024              # network input size; with fixed: true images are stretched to exactly this
+//     height: 512
+//     fixed: true              # false: any size; width/height (optional) is then the size used
+//     size_divisor: 32         # not fixed and no width/height: the image size rounded to a multiple of this
+//     channel_order: rgb       # rgb | bgr (grey images are fed as three equal channels)
+//     scale: 0.00392156862745098
+//     mean: [0, 0, 0]          # x = (pixel * scale - mean) / std, per channel in channel_order
+//     std: [1, 1, 1]
+//   output:
+//     name: ""                 # output blob name; empty = the network's last output
+//     layout: nchw             # nchw | nhwc (scores per class) | labels (class indices, N x H x W)
+//     scores: logits           # logits (softmax applied) | probabilities | log_probabilities
+//     classes: [none, road, sidewalk, ...]   # output channel -> class name, trainId, or none/unlabeled/-1/255;
+//                                            # "cityscapes" = the 19 trainIds in order (the default)
+//
+// `${VAR}` and `${VAR:-default}` in `file` are expanded from the environment; a relative result is relative to the
+// card's folder.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "semslam/semantics/segmentation.h"
+
+namespace semslam {
+
+struct ModelCard {
+  enum class Format { kAuto, kTorch, kOnnx };
+  enum class Layout { kNchw, kNhwc, kLabels };
+
+  std::string name;
+  std::filesystem::path file;
+  Format format = Format::kAuto;
+  int input_width = 0;   // 0: the image's (rounded to size_divisor)
+  int input_height = 0;
+  bool fixed_size = false;
+  int size_divisor = 32;
+  bool rgb = true;
+  double scale = 1.0;
+  std::array<double, 3> mean{0.0, 0.0, 0.0};
+  std::array<double, 3> stddev{1.0, 1.0, 1.0};  // "std" in the card
+  std::string output_name;
+  Layout layout = Layout::kNchw;
+  ScoreKind scores = ScoreKind::kLogits;
+  // Output channel (or label index) -> trainId, kNoLabel for "no class".
+  std::vector<std::uint8_t> channel_to_train_id;
+
+  // Throws InvalidArgument naming the bad field.
+  void Check() const;
+  // The format, resolved from the file's extension when kAuto.
+  Format ResolvedFormat() const;
+};
+
+// Reads and checks a model card. Throws InputError naming the file, line and field.
+ModelCard ReadModelCard(const std::filesystem::path& path);
+// Parses a card from YAML text; relative files are resolved against `base_dir`. `source` names it in errors.
+ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& base_dir,
+                         const std::filesystem::path& source);
+
+// The ENet Cityscapes model of e-lab (Torch7): RGB, scale 1/255, no mean/std, fixed 1024x512 input (other sizes
+// give nearly all 'unlabeled' with OpenCV 4.6), 20 logit channels: 0 = unlabeled, trainId = channel - 1.
+ModelCard EnetCityscapesCard(const std::filesystem::path& weights);
+
+// Expands ${VAR} and ${VAR:-default} from the environment. Throws InvalidArgument for an unset variable without a
+// default or an unterminated reference.
+std::string ExpandEnvironment(const std::string& text);
+
+}  // namespace semslam

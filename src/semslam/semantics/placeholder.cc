@@ -1,1 +1,0 @@
-// Placeholder until the semantics module has sources.

@@ -1,0 +1,122 @@
+#include "semslam/semantics/segmenter.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <vector>
+
+#include "semslam/core/error.h"
+#include "semslam/semantics/dnn_segmenter.h"
+#include "semslam/semantics/label_image_segmenter.h"
+#include "semslam/semantics/model_card.h"
+
+namespace semslam {
+namespace {
+
+bool IsSettingKey(std::string_view key) {
+  static const char* const kKeys[] = {"alpha", "ids", "seed", "blobs", "blob_size", "threads"};
+  for (const char* k : kKeys) {
+    if (key == k) return true;
+  }
+  return false;
+}
+
+struct ParsedSpec {
+  std::string kind;
+  std::string argument;
+  std::map<std::string, std::string> settings;
+};
+
+ParsedSpec ParseSpec(std::string_view spec) {
+  ParsedSpec parsed;
+  std::string text(spec);
+  // Trailing ",key=value" settings (a path may itself contain commas: only known keys are split off).
+  for (;;) {
+    const size_t comma = text.rfind(',');
+    if (comma == std::string::npos) break;
+    const std::string tail = text.substr(comma + 1);
+    const size_t eq = tail.find('=');
+    if (eq == std::string::npos || !IsSettingKey(tail.substr(0, eq))) break;
+    parsed.settings[tail.substr(0, eq)] = tail.substr(eq + 1);
+    text.resize(comma);
+  }
+  const size_t colon = text.find(':');
+  parsed.kind = text.substr(0, colon);
+  for (char& c : parsed.kind) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (colon != std::string::npos) parsed.argument = text.substr(colon + 1);
+  return parsed;
+}
+
+double ParseNumber(const std::string& text, const std::string& what) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  Require(!text.empty() && end != text.c_str() && *end == '\0' && std::isfinite(v),
+          "segmenter spec: " + what + " '" + text + "' is not a number");
+  return v;
+}
+
+}  // namespace
+
+std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterContext& context) {
+  const ParsedSpec p = ParseSpec(spec);
+  const auto setting = [&](const std::string& key) -> const std::string* {
+    const auto it = p.settings.find(key);
+    return it == p.settings.end() ? nullptr : &it->second;
+  };
+  const auto allow = [&](std::initializer_list<std::string_view> keys) {
+    for (const auto& [key, value] : p.settings) {
+      bool ok = false;
+      for (std::string_view k : keys) ok = ok || key == k;
+      Require(ok, "segmenter spec '" + std::string(spec) + "': setting '" + key + "' does not apply to " + p.kind);
+    }
+  };
+  const auto need_argument = [&](const char* what) {
+    Require(!p.argument.empty(), "segmenter spec '" + std::string(spec) + "': " + p.kind + " needs " + what);
+  };
+
+  if (p.kind == "none" || p.kind.empty()) {
+    Require(p.argument.empty() && p.settings.empty(), "segmenter spec 'none' takes no argument");
+    return nullptr;
+  }
+  if (p.kind == "enet" || p.kind == "onnx" || p.kind == "card" || p.kind == "dnn") {
+    allow({"threads"});
+    need_argument(p.kind == "enet" ? "the model file (enet:FILE)" : "a model card (onnx:CARD.yaml)");
+    DnnSegmenter::Options options;
+    if (const auto* t = setting("threads")) options.threads = static_cast<int>(ParseNumber(*t, "threads"));
+    const std::filesystem::path argument(p.argument);
+    const std::string ext = argument.extension().string();
+    ModelCard card = (p.kind == "enet" && ext != ".yaml" && ext != ".yml") ? EnetCityscapesCard(argument)
+                                                                             : ReadModelCard(argument);
+    return std::make_unique<DnnSegmenter>(std::move(card), options);
+  }
+  if (p.kind == "labels") {
+    allow({"alpha", "ids"});
+    need_argument("a folder (labels:DIR)");
+    LabelImageSegmenter::Options options;
+    if (const auto* a = setting("alpha")) options.alpha = static_cast<float>(ParseNumber(*a, "alpha"));
+    if (const auto* ids = setting("ids")) {
+      Require(*ids == "train" || *ids == "label", "segmenter spec: ids must be 'train' or 'label'");
+      options.label_ids = *ids == "label";
+    }
+    return std::make_unique<LabelImageSegmenter>(p.argument, options);
+  }
+  if (p.kind == "truth-noisy") {
+    allow({"alpha", "seed", "blobs", "blob_size"});
+    need_argument("a rate (truth-noisy:RATE)");
+    Require(context.truth_label_dir.has_value(),
+            "segmenter spec '" + std::string(spec) + "': the sequence has no ground-truth labels (label_0/)");
+    TruthNoisySegmenter::Options options;
+    options.noise.rate = ParseNumber(p.argument, "rate");
+    options.seed = context.seed;
+    if (const auto* a = setting("alpha")) options.alpha = static_cast<float>(ParseNumber(*a, "alpha"));
+    if (const auto* s = setting("seed")) options.seed = static_cast<std::uint64_t>(ParseNumber(*s, "seed"));
+    if (const auto* b = setting("blobs")) options.noise.blob_fraction = ParseNumber(*b, "blobs");
+    if (const auto* b = setting("blob_size")) options.noise.blob_size = ParseNumber(*b, "blob_size");
+    return std::make_unique<TruthNoisySegmenter>(*context.truth_label_dir, options);
+  }
+  throw InvalidArgument("unknown segmenter '" + std::string(spec) +
+                        "'; expected none, enet:FILE, onnx:CARD.yaml, labels:DIR or truth-noisy:RATE");
+}
+
+}  // namespace semslam
