@@ -1,14 +1,116 @@
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
-#include <stdexcept>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include "commands.h"
+#include "semslam/core/error.h"
+#include "semslam/core/progress.h"
+#include "semslam/core/timing.h"
+#include "semslam/place/vocabulary.h"
+#include "semslam/place/vocabulary_builder.h"
 
 namespace semslam::cli {
+namespace {
+
+void PrintSummary(const Vocabulary& vocabulary, const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(path, ec);
+  std::fprintf(stderr, "vocabulary %s: k = %d, L = %d, %zu words, %zu nodes, %s descriptors, %.2f MB\n",
+               path.string().c_str(), vocabulary.branching(), vocabulary.depth(), vocabulary.size(),
+               vocabulary.num_nodes(),
+               vocabulary.descriptor_pattern() == OrbDescriptorPattern::kOpenCv ? "OpenCV-pattern ORB" : "semslam ORB",
+               ec ? 0.0 : static_cast<double>(bytes) / 1e6);
+}
+
+struct TrainArgs {
+  std::vector<std::string> image_dirs;
+  std::string out;
+  int k = 10;
+  int levels = 4;
+  size_t max_images = 0;
+  int features = 1000;
+  int iterations = 10;
+  std::uint64_t seed = 1;
+  bool opencv_pattern = false;
+};
+
+void Train(const TrainArgs& args) {
+  Stopwatch watch;
+  std::vector<std::filesystem::path> folders(args.image_dirs.begin(), args.image_dirs.end());
+  const auto images = ListTrainingImages(folders, args.max_images);
+  std::fprintf(stderr, "vocab train: %zu images, %d features each\n", images.size(), args.features);
+  OrbOptions orb;
+  orb.num_features = args.features;
+  orb.pattern = args.opencv_pattern ? OrbDescriptorPattern::kOpenCv : OrbDescriptorPattern::kSemslam;
+  orb.Check();
+  ProgressReporter progress("extracting features", images.size());
+  const auto descriptors =
+      ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+  progress.Finish();
+  VocabularyTrainingOptions options;
+  options.branching = args.k;
+  options.depth = args.levels;
+  options.max_iterations = args.iterations;
+  options.seed = args.seed;
+  options.pattern = orb.pattern;
+  const Vocabulary vocabulary = Vocabulary::Train(
+      descriptors, options, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+  vocabulary.Save(args.out);
+  PrintSummary(vocabulary, args.out);
+  std::fprintf(stderr, "vocab train: done in %.1f s\n", watch.ElapsedSeconds());
+}
+
+}  // namespace
 
 void AddVocabCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("vocab", "Train or convert a bag-of-words vocabulary");
-  cmd->callback([] { throw std::runtime_error("vocab: not implemented yet"); });
+  auto* cmd = app.add_subcommand("vocab", "Train, convert or inspect a bag-of-words vocabulary");
+  cmd->require_subcommand(1);
+
+  auto args = std::make_shared<TrainArgs>();
+  auto* train = cmd->add_subcommand("train", "Train a vocabulary on the ORB features of image folders");
+  train->add_option("--images", args->image_dirs,
+                    "Image folders (or KITTI-layout datasets: DIR/image_0, DIR/sequences/*/image_0)")
+      ->required()
+      ->expected(1, -1);
+  train->add_option("--out", args->out, "Vocabulary file to write")->required();
+  train->add_option("--k", args->k, "Branching factor")->capture_default_str()->check(CLI::Range(2, 256));
+  train->add_option("--levels", args->levels, "Depth of the tree (levels below the root)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16));
+  train->add_option("--max-images", args->max_images, "Use at most this many images, evenly spread (0: all)")
+      ->capture_default_str();
+  train->add_option("--features", args->features, "ORB features per image")->capture_default_str()->check(CLI::Range(10, 100000));
+  train->add_option("--iterations", args->iterations, "k-majority iterations per node")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  train->add_option("--seed", args->seed, "Seed of the k-means++ seeding")->capture_default_str();
+  train->add_flag("--opencv-pattern", args->opencv_pattern,
+                  "Describe features with OpenCV's ORB pattern (as DBoW2 vocabularies such as ORBvoc.txt do)");
+  train->callback([args] { Train(*args); });
+
+  auto dbow2 = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto* convert = cmd->add_subcommand("convert", "Convert a DBoW2 text vocabulary (ORBvoc.txt) to semslam's format");
+  convert->add_option("--dbow2", *dbow2, "DBoW2 text vocabulary")->required();
+  convert->add_option("--out", *out, "Vocabulary file to write")->required();
+  convert->callback([dbow2, out] {
+    Stopwatch watch;
+    std::fprintf(stderr, "vocab convert: reading %s\n", dbow2->c_str());
+    const Vocabulary vocabulary = Vocabulary::LoadDbow2Text(*dbow2);
+    std::fprintf(stderr, "vocab convert: read %zu nodes in %.1f s, writing %s\n", vocabulary.num_nodes(),
+                 watch.ElapsedSeconds(), out->c_str());
+    vocabulary.Save(*out);
+    PrintSummary(vocabulary, *out);
+  });
+
+  auto file = std::make_shared<std::string>();
+  auto* info = cmd->add_subcommand("info", "Print a vocabulary's parameters");
+  info->add_option("file", *file, "Vocabulary file (semslam or DBoW2 text)")->required();
+  info->callback([file] { PrintSummary(Vocabulary::Load(*file), *file); });
 }
 
 }  // namespace semslam::cli

@@ -1,1 +1,0 @@
-// Placeholder until the place module has sources.
