@@ -109,11 +109,17 @@ TEST(SemanticOutputs, SegmentationScoreByHand) {
   EXPECT_NEAR(*score.ClassIou(1), 2.0 / 3.0, 1e-12);
   EXPECT_FALSE(score.ClassIou(2).has_value());
   EXPECT_NEAR(score.MeanIou(), 0.5833333333, 1e-9);
+  EXPECT_NEAR(score.MeanIouOverTruthClasses(), 0.5833333333, 1e-9);
   EXPECT_EQ(score.Count(0, 1), 1u);
   // A missing prediction is wrong.
   score.Add((cv::Mat_<std::uint8_t>(1, 1) << 255), (cv::Mat_<std::uint8_t>(1, 1) << 1));
   EXPECT_NEAR(score.PixelAccuracy(), 0.6, 1e-12);
   EXPECT_EQ(score.Count(1, kNumClasses), 1u);
+  // A class predicted where the truth has another counts in MeanIou (IoU 0), not over the truth's classes.
+  score.Add((cv::Mat_<std::uint8_t>(1, 1) << 13), (cv::Mat_<std::uint8_t>(1, 1) << 0));
+  EXPECT_NEAR(*score.ClassIou(13), 0.0, 1e-12);
+  EXPECT_NEAR(score.MeanIou(), (1.0 / 3.0 + 2.0 / 4.0 + 0.0) / 3.0, 1e-9);
+  EXPECT_NEAR(score.MeanIouOverTruthClasses(), (1.0 / 3.0 + 2.0 / 4.0) / 2.0, 1e-9);
   EXPECT_THROW(score.Add(predicted, truth.colRange(0, 4)), InvalidArgument);
 }
 

@@ -88,6 +88,11 @@ TEST(ModelCard, ParsesFieldsAndReportsErrorsWithLines) {
   EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {std: [1, 0, 1]}\n", "/m", "/m/c.yaml"), InputError);
   EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {fixed: true}\n", "/m", "/m/c.yaml"), InputError);
   EXPECT_THROW(ParseModelCard("file: [unclosed\n", "/m", "/m/c.yaml"), InputError);
+  EXPECT_EQ(ParseModelCard("file: a.onnx\ninput: {width: 4, height: 2, fixed: true, resize: tile}\n", "/m", "/m/c.yaml")
+                .resize,
+            ModelCard::Resize::kTile);
+  EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {resize: tile}\n", "/m", "/m/c.yaml"), InputError);
+  EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {resize: crop}\n", "/m", "/m/c.yaml"), InputError);
   EXPECT_THROW(ReadModelCard("/nonexistent/card.yaml"), InputError);
   EXPECT_THROW(DnnSegmenter(EnetCityscapesCard("/nonexistent/enet.net")), InputError);
 }
@@ -106,14 +111,17 @@ TEST(DnnSegmenter, TinyOnnxNetworkFollowsTheCard) {
   EXPECT_EQ(s.LabelAt(3, 8), 0);     // red -> road (so the card's RGB order was applied)
   EXPECT_EQ(s.LabelAt(12, 8), 13);   // green -> car
   EXPECT_EQ(s.LabelAt(20, 2), 10);   // blue -> sky
-  // Red: normalized (1, -1, -1), logits (0, 4, -4, -4): softmax road = e^4 / (1 + e^4 + 2 e^-4) = 0.981406, plus
-  // the unlabeled share 0.017986 / 19.
+  // Red: normalized (1, -1, -1), logits (0, 4, -4, -4): softmax road = e^4 / (1 + e^4 + 2 e^-4) = 0.98137, plus
+  // the unlabeled share 0.017974 / 19.
   ClassLogProbs p;
   ASSERT_TRUE(s.Sample(Eigen::Vector2d(0, 0), &p));
-  EXPECT_NEAR(std::exp(p[0]), 0.981406 + 0.017986 / 19, 2e-4);
-  // Black: logits (0, -4, -4, -4): mostly 'unlabeled', spread evenly: nearly uniform.
-  ASSERT_TRUE(s.Sample(Eigen::Vector2d(30, 8), &p));
-  EXPECT_NEAR(std::exp(p[5]), 0.947 / 19, 2e-3);
+  EXPECT_NEAR(std::exp(p[0]), 0.98137 + 0.017974 / 19, 2e-4);
+  // Black: logits (0, -4, -4, -4): 'unlabeled' (0.948) outweighs every class: no label, no observation.
+  EXPECT_FALSE(s.Sample(Eigen::Vector2d(30, 8), &p));
+  EXPECT_EQ(s.LabelAt(30, 8), kNoLabel);
+  EXPECT_EQ(s.Labels().at<std::uint8_t>(4, 15), kNoLabel);
+  EXPECT_EQ(s.Confidence().at<float>(4, 15), 0.0f);
+  EXPECT_EQ(s.Compacted().LabelAt(30, 8), kNoLabel);
 
   // Grey input goes in as three equal channels.
   const Segmentation grey = segmenter.Segment(cv::Mat(16, 32, CV_8UC1, cv::Scalar(255)));
@@ -141,6 +149,30 @@ TEST(DnnSegmenter, FreeInputSizeAndNhwcMismatchErrors) {
   card.channel_to_train_id = {0, 1, 2};  // the network has 4 channels
   DnnSegmenter wrong(card);
   EXPECT_THROW(wrong.Segment(image), InputError);
+}
+
+// resize: tile keeps the aspect ratio: a 64x16 image is scaled to 32x8 and run as two 16x8 windows.
+TEST(DnnSegmenter, TiledWindowsKeepTheAspectRatio) {
+  ModelCard card = ReadModelCard(kTestData / "tiny_segnet.yaml");
+  card.resize = ModelCard::Resize::kTile;
+  DnnSegmenter segmenter(card);
+  EXPECT_NE(segmenter.Describe().find("tiled"), std::string::npos);
+  cv::Mat image(16, 64, CV_8UC3, cv::Scalar(0, 0, 255));     // red: road
+  image.colRange(40, 64).setTo(cv::Scalar(255, 0, 0));         // blue: sky
+  const Segmentation s = segmenter.Segment(image);
+  EXPECT_EQ(s.input_size(), cv::Size(64, 16));
+  EXPECT_EQ(s.storage_size(), cv::Size(32, 8));
+  EXPECT_EQ(s.LabelAt(2, 8), 0);
+  EXPECT_EQ(s.LabelAt(36, 8), 0);
+  EXPECT_EQ(s.LabelAt(44, 8), 10);
+  EXPECT_EQ(s.LabelAt(63, 15), 10);
+  // Overlapping windows (40x16 -> 20x8, windows at 0 and 4) average to the same probabilities.
+  const Segmentation o = segmenter.Segment(cv::Mat(16, 40, CV_8UC3, cv::Scalar(0, 0, 255)));
+  ClassLogProbs p;
+  ASSERT_TRUE(o.Sample(Eigen::Vector2d(10, 8), &p));
+  EXPECT_NEAR(std::exp(p[0]), 0.98137 + 0.017974 / 19, 2e-4);
+  // Narrower than the network: plain stretch.
+  EXPECT_EQ(segmenter.Segment(cv::Mat(16, 24, CV_8UC3, cv::Scalar(0, 0, 255))).storage_size(), cv::Size(16, 8));
 }
 
 TEST(DnnSegmenter, EnetOnKittiFrame) {
@@ -330,6 +362,9 @@ TEST(MakeSegmenter, SpecsAndErrors) {
   EXPECT_THROW(MakeSegmenter("labels:" + kTestData.string() + ",alpha=2"), InvalidArgument);
   EXPECT_THROW(MakeSegmenter("enet:"), InvalidArgument);
   EXPECT_THROW(MakeSegmenter("enet:/nonexistent/enet-model.net"), InputError);
+  EXPECT_THROW(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=crop"), InvalidArgument);
+  EXPECT_NE(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=tile")->Describe().find("tiled"),
+            std::string::npos);
   auto onnx = MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string());
   ASSERT_NE(onnx, nullptr);
   EXPECT_NE(onnx->Describe().find("tiny-segnet"), std::string::npos);

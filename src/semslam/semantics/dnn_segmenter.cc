@@ -4,6 +4,8 @@
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -43,7 +45,8 @@ std::string DnnSegmenter::Describe() const {
   s << "dnn " << card_.name << " (" << card_.file.string() << ", "
     << (card_.ResolvedFormat() == ModelCard::Format::kTorch ? "torch" : "onnx") << ", input ";
   if (card_.input_width > 0) {
-    s << card_.input_width << "x" << card_.input_height << (card_.fixed_size ? " fixed" : "");
+    s << card_.input_width << "x" << card_.input_height
+      << (card_.fixed_size ? (card_.resize == ModelCard::Resize::kTile ? " fixed, tiled" : " fixed, stretched") : "");
   } else {
     s << "image size";
   }
@@ -100,48 +103,63 @@ cv::Mat DnnSegmenter::Preprocess(const cv::Mat& image) const {
   return cv::dnn::blobFromImage(normalized, 1.0, cv::Size(), cv::Scalar(), false, false, CV_32F);
 }
 
-Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_index*/) {
+cv::Mat DnnSegmenter::Forward(const cv::Mat& image) {
   const cv::Mat blob = Preprocess(image);
   if (options_.threads > 0) cv::setNumThreads(options_.threads);
-  cv::Mat output;
   try {
     network_->net.setInput(blob);
-    output = card_.output_name.empty() ? network_->net.forward() : network_->net.forward(card_.output_name);
+    return card_.output_name.empty() ? network_->net.forward() : network_->net.forward(card_.output_name);
   } catch (const cv::Exception& e) {
     throw InputError(card_.file, std::string("forward pass failed: ") + e.err);
   }
-  const size_t num_channels = card_.channel_to_train_id.size();
+}
+
+namespace {
+
+std::vector<int> OutputShape(const cv::Mat& output) {
   std::vector<int> shape(output.size.p, output.size.p + output.dims);
   // Drop a leading batch dimension of 1.
   if (!shape.empty() && shape.front() == 1 && shape.size() >= 3) shape.erase(shape.begin());
-  const auto describe = [&] {
-    std::string s;
-    for (int d : shape) s += (s.empty() ? "" : "x") + std::to_string(d);
-    return s;
-  };
+  return shape;
+}
 
-  if (card_.layout == ModelCard::Layout::kLabels) {
-    if (shape.size() == 3 && shape[0] == 1) shape.erase(shape.begin());
-    if (shape.size() != 2) {
-      throw InputError(card_.file, "label output of shape " + describe() + ", expected HxW");
-    }
-    cv::Mat indices(shape[0], shape[1], CV_32SC1);
-    cv::Mat(shape[0], shape[1], output.type(), output.data).convertTo(indices, CV_32SC1);
-    cv::Mat labels(indices.size(), CV_8UC1);
-    for (int y = 0; y < labels.rows; ++y) {
-      const int* in = indices.ptr<int>(y);
-      std::uint8_t* out = labels.ptr<std::uint8_t>(y);
-      for (int x = 0; x < labels.cols; ++x) {
-        out[x] = (in[x] >= 0 && static_cast<size_t>(in[x]) < num_channels)
-                     ? card_.channel_to_train_id[static_cast<size_t>(in[x])]
-                     : kNoLabel;
-      }
-    }
-    return Segmentation::FromLabels(labels, image.size(), 1.0f);
+std::string ShapeText(const std::vector<int>& shape) {
+  std::string s;
+  for (int d : shape) s += (s.empty() ? "" : "x") + std::to_string(d);
+  return s;
+}
+
+// Per-channel probabilities (normalized over the channels) from score planes.
+std::vector<cv::Mat> ToProbabilities(const std::vector<cv::Mat>& planes, ScoreKind kind) {
+  std::vector<cv::Mat> p(planes.size());
+  cv::Mat sum = cv::Mat::zeros(planes[0].size(), CV_32FC1);
+  cv::Mat max_score;
+  if (kind == ScoreKind::kLogits) {
+    max_score = planes[0].clone();
+    for (size_t c = 1; c < planes.size(); ++c) cv::max(max_score, planes[c], max_score);
   }
+  for (size_t c = 0; c < planes.size(); ++c) {
+    if (kind == ScoreKind::kLogits) {
+      cv::exp(planes[c] - max_score, p[c]);
+    } else if (kind == ScoreKind::kLogProbabilities) {
+      cv::exp(planes[c], p[c]);
+    } else {
+      p[c] = cv::max(planes[c], 0.0);
+    }
+    sum += p[c];
+  }
+  cv::max(sum, 1e-30, sum);
+  for (cv::Mat& plane : p) cv::divide(plane, sum, plane);
+  return p;
+}
 
+}  // namespace
+
+std::vector<cv::Mat> DnnSegmenter::ScorePlanes(cv::Mat& output) const {
+  const size_t num_channels = card_.channel_to_train_id.size();
+  const std::vector<int> shape = OutputShape(output);
   if (output.depth() != CV_32F || shape.size() != 3) {
-    throw InputError(card_.file, "output of shape " + describe() + ", expected 1xCxHxW or 1xHxWxC float scores");
+    throw InputError(card_.file, "output of shape " + ShapeText(shape) + ", expected 1xCxHxW or 1xHxWxC float scores");
   }
   std::vector<cv::Mat> planes;
   if (card_.layout == ModelCard::Layout::kNchw) {
@@ -160,7 +178,73 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
     cv::Mat interleaved(shape[0], shape[1], CV_32FC(static_cast<int>(num_channels)), output.ptr<float>());
     cv::split(interleaved, planes);
   }
-  return SegmentationFromScores(planes, card_.scores, card_.channel_to_train_id, image.size());
+  return planes;
+}
+
+Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_index*/) {
+  Require(!image.empty(), "DnnSegmenter: empty image");
+  const size_t num_channels = card_.channel_to_train_id.size();
+  const cv::Size net_size(card_.input_width, card_.input_height);
+  const int tiled_width = card_.resize == ModelCard::Resize::kTile
+                              ? static_cast<int>(std::lround(image.cols * static_cast<double>(net_size.height) /
+                                                             image.rows))
+                              : 0;
+  if (tiled_width > net_size.width) {
+    // Keep the aspect ratio: scale to the network's height, run overlapping windows across, average.
+    cv::Mat scaled;
+    cv::resize(image, scaled, cv::Size(tiled_width, net_size.height), 0, 0,
+               net_size.height < image.rows ? cv::INTER_AREA : cv::INTER_LINEAR);
+    const int windows = (tiled_width + net_size.width - 1) / net_size.width;
+    std::vector<cv::Mat> sum;
+    cv::Mat count;
+    double out_scale = 1.0;
+    for (int w = 0; w < windows; ++w) {
+      const int x0 = static_cast<int>(std::lround(static_cast<double>(w) * (tiled_width - net_size.width) /
+                                                  std::max(windows - 1, 1)));
+      cv::Mat output = Forward(scaled.colRange(x0, x0 + net_size.width));
+      const std::vector<cv::Mat> p = ToProbabilities(ScorePlanes(output), card_.scores);
+      if (sum.empty()) {
+        out_scale = static_cast<double>(p[0].cols) / net_size.width;
+        const cv::Size out_size(static_cast<int>(std::lround(tiled_width * out_scale)), p[0].rows);
+        sum.assign(num_channels, cv::Mat());
+        for (cv::Mat& m : sum) m = cv::Mat::zeros(out_size, CV_32FC1);
+        count = cv::Mat::zeros(1, out_size.width, CV_32FC1);
+      }
+      const int ox = std::min(static_cast<int>(std::lround(x0 * out_scale)), sum[0].cols - p[0].cols);
+      for (size_t c = 0; c < num_channels; ++c) sum[c].colRange(ox, ox + p[c].cols) += p[c];
+      count.colRange(ox, ox + p[0].cols) += 1.0f;
+    }
+    const cv::Mat inverse_count = 1.0 / cv::max(count, 1.0f);
+    for (cv::Mat& m : sum) {
+      m = m.mul(cv::repeat(inverse_count, m.rows, 1));
+      // Never store more cells than the image has pixels.
+      if (m.cols > image.cols && m.rows > image.rows) cv::resize(m, m, image.size(), 0, 0, cv::INTER_AREA);
+    }
+    return SegmentationFromScores(sum, ScoreKind::kProbabilities, card_.channel_to_train_id, image.size());
+  }
+
+  cv::Mat output = Forward(image);
+  if (card_.layout == ModelCard::Layout::kLabels) {
+    std::vector<int> shape = OutputShape(output);
+    if (shape.size() == 3 && shape[0] == 1) shape.erase(shape.begin());
+    if (shape.size() != 2) {
+      throw InputError(card_.file, "label output of shape " + ShapeText(shape) + ", expected HxW");
+    }
+    cv::Mat indices(shape[0], shape[1], CV_32SC1);
+    cv::Mat(shape[0], shape[1], output.type(), output.data).convertTo(indices, CV_32SC1);
+    cv::Mat labels(indices.size(), CV_8UC1);
+    for (int y = 0; y < labels.rows; ++y) {
+      const int* in = indices.ptr<int>(y);
+      std::uint8_t* out = labels.ptr<std::uint8_t>(y);
+      for (int x = 0; x < labels.cols; ++x) {
+        out[x] = (in[x] >= 0 && static_cast<size_t>(in[x]) < num_channels)
+                     ? card_.channel_to_train_id[static_cast<size_t>(in[x])]
+                     : kNoLabel;
+      }
+    }
+    return Segmentation::FromLabels(labels, image.size(), 1.0f);
+  }
+  return SegmentationFromScores(ScorePlanes(output), card_.scores, card_.channel_to_train_id, image.size());
 }
 
 }  // namespace semslam

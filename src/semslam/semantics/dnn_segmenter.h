@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "semslam/semantics/model_card.h"
 #include "semslam/semantics/segmenter.h"
@@ -34,6 +35,11 @@ class DnnSegmenter : public Segmenter {
   cv::Mat Preprocess(const cv::Mat& image) const;
 
  private:
+  // Runs the network on one image (resized to the network's input as the card says); the raw output.
+  cv::Mat Forward(const cv::Mat& image);
+  // One CV_32F plane per output channel (views into `output` for NCHW).
+  std::vector<cv::Mat> ScorePlanes(cv::Mat& output) const;
+
   ModelCard card_;
   Options options_;
   struct Network;  // the cv::dnn::Net, kept out of this header

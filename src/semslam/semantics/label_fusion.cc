@@ -28,14 +28,6 @@ void LabelDistribution::Renormalize() {
   for (float& v : log_p_) v = std::max(v - best, kMinRelativeLogProbability);
 }
 
-void LabelDistribution::Fuse(const float* observation_log_probs) {
-  for (int c = 0; c < kNumClasses; ++c) {
-    log_p_[static_cast<size_t>(c)] += std::max(observation_log_probs[c], kMinObservationLogProbability);
-  }
-  ++observations_;
-  Renormalize();
-}
-
 void LabelDistribution::FuseLabel(int label, float alpha) {
   if (!IsValidTrainId(label)) return;
   Fuse(ConfusionLogProbs(label, alpha));
@@ -52,32 +44,40 @@ int LabelDistribution::Label() const {
   return static_cast<int>(std::max_element(log_p_.begin(), log_p_.end()) - log_p_.begin());
 }
 
+ClassLogProbs LabelDistribution::RelativeLogProbabilities() const {
+  LabelDistribution copy = *this;
+  copy.Renormalize();
+  return copy.log_p_;
+}
+
 float LabelDistribution::Confidence() const {
-  // The maximum is 0, so the argmax's posterior is 1 / sum(exp(log_p)).
+  // Relative to the maximum, the argmax's posterior is 1 / sum(exp(log_p - max)).
+  const float best = *std::max_element(log_p_.begin(), log_p_.end());
   float sum = 0.0f;
-  for (float v : log_p_) sum += std::exp(v);
+  for (float v : log_p_) sum += std::exp(std::max(v - best, kMinRelativeLogProbability));
   return 1.0f / sum;
 }
 
 std::array<float, kNumClasses> LabelDistribution::Probabilities() const {
+  const ClassLogProbs relative = RelativeLogProbabilities();
   std::array<float, kNumClasses> p;
   float sum = 0.0f;
-  for (int c = 0; c < kNumClasses; ++c) sum += p[static_cast<size_t>(c)] = std::exp(log_p_[static_cast<size_t>(c)]);
+  for (int c = 0; c < kNumClasses; ++c) sum += p[static_cast<size_t>(c)] = std::exp(relative[static_cast<size_t>(c)]);
   for (float& v : p) v /= sum;
   return p;
 }
 
 ClassLogProbs LabelDistribution::NormalizedLogProbabilities() const {
+  ClassLogProbs out = RelativeLogProbabilities();
   float sum = 0.0f;
-  for (float v : log_p_) sum += std::exp(v);
+  for (float v : out) sum += std::exp(v);
   const float log_z = std::log(sum);
-  ClassLogProbs out;
-  for (int c = 0; c < kNumClasses; ++c) out[static_cast<size_t>(c)] = log_p_[static_cast<size_t>(c)] - log_z;
+  for (float& v : out) v -= log_z;
   return out;
 }
 
 void LabelDistribution::AppendTo(BinaryWriter& writer) const {
-  for (float v : log_p_) writer.Put<float>(v);
+  for (float v : RelativeLogProbabilities()) writer.Put<float>(v);
   writer.Put<std::uint32_t>(observations_);
 }
 

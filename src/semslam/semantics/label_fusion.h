@@ -3,9 +3,10 @@
 //
 // A point's posterior over the 19 classes after observations F_1..F_k (uniform prior) is
 //   p(l | F_1..k) = p(l | F_k) p(l | F_1..k-1) / Z,   Z = sum_l p(l | F_k) p(l | F_1..k-1)      (eqs. 4-5)
-// kept as log-probabilities: an observation adds its log-probabilities; normalization is lazy (the maximum is
-// kept at 0 so nothing overflows, Z is computed only when a probability is asked for); the label is the argmax
-// (eq. 6) and its confidence the posterior of the argmax.
+// kept as log-probabilities: an observation adds its log-probabilities (19 additions, nothing else); normalization
+// is lazy: Z is never needed for the argmax and is computed only when a probability is asked for, and every few
+// observations the values are shifted so that the maximum is 0 (nothing drifts out of float precision) and floored
+// at kMinRelativeLogProbability. The label is the argmax (eq. 6) and its confidence the posterior of the argmax.
 // A keyframe observation projects the point into the keyframe (eqs. 1-2) and reads the segmentation's
 // distribution at that pixel (eq. 3): FuseKeyframeObservations does this for a batch of points.
 
@@ -26,10 +27,10 @@ namespace semslam {
 
 class LabelDistribution {
  public:
-  // Posterior log-probabilities, relative to the most probable class: the maximum is 0 and no entry is below
-  // kMinRelativeLogProbability (e^-60: far beyond anything one observation can overturn, and it keeps float
-  // sums exact enough).
+  // Posterior log-probabilities are kept relative to the most probable class, floored at kMinRelativeLogProbability
+  // (e^-60: far beyond anything a few observations can overturn) at least every kRenormalizeEvery observations.
   static constexpr float kMinRelativeLogProbability = -60.0f;
+  static constexpr std::uint32_t kRenormalizeEvery = 8;
   static constexpr size_t kSerializedBytes = kNumClasses * sizeof(float) + sizeof(std::uint32_t);
 
   // Uniform, no observations.
@@ -42,7 +43,13 @@ class LabelDistribution {
   // Multiplies in one observation (19 log-probabilities, e.g. from Segmentation::Sample; they need not be
   // normalized). Each entry is floored at kMinObservationLogProbability first, so no single observation can rule
   // a class out.
-  void Fuse(const float* observation_log_probs);
+  void Fuse(const float* observation_log_probs) {
+    for (int c = 0; c < kNumClasses; ++c) {
+      const float v = observation_log_probs[c];
+      log_p_[static_cast<size_t>(c)] += v > kMinObservationLogProbability ? v : kMinObservationLogProbability;
+    }
+    if (++observations_ % kRenormalizeEvery == 0) Renormalize();
+  }
   void Fuse(const ClassLogProbs& observation) { Fuse(observation.data()); }
   // Fuses the label-only observation `label` with the confusion model (alpha for the label, the rest spread
   // evenly). kNoLabel is ignored.
@@ -60,8 +67,8 @@ class LabelDistribution {
   // Normalized posterior probabilities and log-probabilities.
   std::array<float, kNumClasses> Probabilities() const;
   ClassLogProbs NormalizedLogProbabilities() const;
-  // The stored relative log-probabilities (maximum 0).
-  const ClassLogProbs& RelativeLogProbabilities() const { return log_p_; }
+  // Log-probabilities relative to the most probable class (maximum 0), floored at kMinRelativeLogProbability.
+  ClassLogProbs RelativeLogProbabilities() const;
 
   // 80 bytes: 19 little-endian float32 relative log-probabilities, then the uint32 observation count.
   void AppendTo(BinaryWriter& writer) const;
@@ -70,12 +77,15 @@ class LabelDistribution {
   // Throws InvalidArgument on a wrong size or invalid values.
   static LabelDistribution FromBytes(std::string_view bytes);
 
-  friend bool operator==(const LabelDistribution&, const LabelDistribution&) = default;
+  // Same observation count and same relative log-probabilities.
+  friend bool operator==(const LabelDistribution& a, const LabelDistribution& b) {
+    return a.observations_ == b.observations_ && a.RelativeLogProbabilities() == b.RelativeLogProbabilities();
+  }
 
  private:
   void Renormalize();
 
-  ClassLogProbs log_p_;
+  ClassLogProbs log_p_;  // up to a constant: the posterior's log-probabilities
   std::uint32_t observations_ = 0;
 };
 

@@ -111,6 +111,8 @@ void ModelCard::Check() const {
   Require(input_width >= 0 && input_height >= 0 && (input_width > 0) == (input_height > 0),
           "model card: input width and height must both be positive or both be absent");
   Require(!fixed_size || input_width > 0, "model card: a fixed input needs width and height");
+  Require(resize == Resize::kStretch || fixed_size, "model card: resize: tile needs a fixed input size");
+  Require(resize == Resize::kStretch || layout != Layout::kLabels, "model card: resize: tile needs score outputs");
   Require(size_divisor >= 1, "model card: size_divisor must be >= 1");
   Require(std::isfinite(scale) && scale > 0.0, "model card: scale must be > 0");
   for (int c = 0; c < 3; ++c) {
@@ -174,6 +176,11 @@ ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& b
     if (input["width"]) card.input_width = p.Get<int>(input["width"], "input.width");
     if (input["height"]) card.input_height = p.Get<int>(input["height"], "input.height");
     if (input["fixed"]) card.fixed_size = p.Get<bool>(input["fixed"], "input.fixed");
+    if (input["resize"]) {
+      const std::string resize = Lower(p.Get<std::string>(input["resize"], "input.resize"));
+      if (resize != "stretch" && resize != "tile") p.Fail(input["resize"], "input.resize", "must be stretch or tile");
+      card.resize = resize == "tile" ? ModelCard::Resize::kTile : ModelCard::Resize::kStretch;
+    }
     if (input["size_divisor"]) card.size_divisor = p.Get<int>(input["size_divisor"], "input.size_divisor");
     if (input["channel_order"]) {
       const std::string order = Lower(p.Get<std::string>(input["channel_order"], "input.channel_order"));
@@ -240,7 +247,7 @@ ModelCard ReadModelCard(const std::filesystem::path& path) {
   if (!in) throw InputError(path, "cannot open the model card");
   std::stringstream text;
   text << in.rdbuf();
-  return ParseModelCard(text.str(), path.parent_path(), path);
+  return ParseModelCard(text.str(), std::filesystem::absolute(path).parent_path(), path);
 }
 
 ModelCard EnetCityscapesCard(const std::filesystem::path& weights) {

@@ -8,6 +8,8 @@
 //     width: 1024              # network input size; with fixed: true images are stretched to exactly this
 //     height: 512
 //     fixed: true              # false: any size; width/height (optional) is then the size used
+//     resize: stretch          # fixed size: stretch the image to it, or tile: keep the aspect ratio, scale the
+//                              # image to the input height and run overlapping windows across it (averaged)
 //     size_divisor: 32         # not fixed and no width/height: the image size rounded to a multiple of this
 //     channel_order: rgb       # rgb | bgr (grey images are fed as three equal channels)
 //     scale: 0.00392156862745098
@@ -43,6 +45,7 @@ struct ModelCard {
   int input_width = 0;   // 0: the image's (rounded to size_divisor)
   int input_height = 0;
   bool fixed_size = false;
+  enum class Resize { kStretch, kTile } resize = Resize::kStretch;
   int size_divisor = 32;
   bool rgb = true;
   double scale = 1.0;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "semslam/core/error.h"
@@ -16,6 +17,9 @@ namespace {
 constexpr float kOthers = 1.0f / (kNumClasses - 1);
 
 float FlooredLog(float p) { return std::max(std::log(std::max(p, 0.0f)), kMinObservationLogProbability); }
+
+// A stored row of all zeros marks a pixel without a label (a real row sums to 1 in probability: at most one 0).
+inline bool IsNoLabelRow(const float* row) { return row[0] == 0.0f && row[1] == 0.0f; }
 
 }  // namespace
 
@@ -44,12 +48,12 @@ Segmentation Segmentation::FromLogProbabilities(cv::Mat log_probabilities, cv::S
   Segmentation s;
   s.storage_ = Storage::kLogProbabilities;
   s.data_ = log_probabilities.isContinuous() ? log_probabilities : log_probabilities.clone();
-  // Floor in place (NaN becomes the floor too: max(NaN, floor) with this argument order returns the floor).
-  cv::Mat flat = s.data_.reshape(1, 1);
-  for (int i = 0; i < flat.cols; ++i) {
-    float& v = flat.at<float>(0, i);
-    if (!(v >= kMinObservationLogProbability)) v = kMinObservationLogProbability;
-    if (v > 0.0f) v = 0.0f;
+  // Floor in place (NaN too).
+  float* v = s.data_.ptr<float>();
+  const size_t n = s.data_.total() * kNumClasses;
+  for (size_t i = 0; i < n; ++i) {
+    if (!(v[i] >= kMinObservationLogProbability)) v[i] = kMinObservationLogProbability;
+    if (v[i] > 0.0f) v[i] = 0.0f;
   }
   s.SetGeometry(input_size);
   return s;
@@ -79,6 +83,7 @@ Segmentation Segmentation::FromLabels(cv::Mat labels, cv::Size input_size, float
 
 bool Segmentation::SampleIndex(int index, float* log_probs) const {
   if (storage_ == Storage::kLogProbabilities) {
+    if (IsNoLabelRow(data_.ptr<float>() + static_cast<size_t>(index) * kNumClasses)) return false;
     std::memcpy(log_probs, data_.ptr<float>() + static_cast<size_t>(index) * kNumClasses,
                 kNumClasses * sizeof(float));
     return true;
@@ -103,6 +108,7 @@ std::uint8_t Segmentation::LabelAt(float x, float y) const {
     return label < kNumClasses ? label : kNoLabel;
   }
   const float* p = data_.ptr<float>() + static_cast<size_t>(index) * kNumClasses;
+  if (IsNoLabelRow(p)) return kNoLabel;
   return static_cast<std::uint8_t>(std::max_element(p, p + kNumClasses) - p);
 }
 
@@ -118,7 +124,7 @@ cv::Mat Segmentation::Labels() const {
   const float* p = data_.ptr<float>();
   std::uint8_t* out = labels.ptr<std::uint8_t>();
   for (size_t i = 0; i < data_.total(); ++i, p += kNumClasses) {
-    out[i] = static_cast<std::uint8_t>(std::max_element(p, p + kNumClasses) - p);
+    out[i] = IsNoLabelRow(p) ? kNoLabel : static_cast<std::uint8_t>(std::max_element(p, p + kNumClasses) - p);
   }
   return labels;
 }
@@ -161,6 +167,10 @@ cv::Mat Segmentation::Confidence() const {
   }
   const float* p = data_.ptr<float>();
   for (size_t i = 0; i < data_.total(); ++i, p += kNumClasses) {
+    if (IsNoLabelRow(p)) {
+      out[i] = 0.0f;
+      continue;
+    }
     const float best = *std::max_element(p, p + kNumClasses);
     float sum = 0.0f;
     for (int c = 0; c < kNumClasses; ++c) sum += std::exp(p[c] - best);
@@ -190,57 +200,75 @@ Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind k
   for (const cv::Mat& plane : planes) {
     Require(plane.type() == CV_32FC1 && plane.size() == size, "SegmentationFromScores: planes must be CV_32F of one size");
   }
-  // Per-channel probabilities.
-  std::vector<cv::Mat> probabilities(planes.size());
-  cv::Mat sum = cv::Mat::zeros(size, CV_32FC1);
-  if (kind == ScoreKind::kLogits) {
-    cv::Mat max_score = planes[0].clone();
-    for (size_t c = 1; c < planes.size(); ++c) cv::max(max_score, planes[c], max_score);
-    for (size_t c = 0; c < planes.size(); ++c) {
-      cv::exp(planes[c] - max_score, probabilities[c]);
-      sum += probabilities[c];
-    }
-  } else {
-    for (size_t c = 0; c < planes.size(); ++c) {
-      if (kind == ScoreKind::kLogProbabilities) {
-        cv::exp(planes[c], probabilities[c]);
-      } else {
-        probabilities[c] = cv::max(planes[c], 0.0);
-      }
-      sum += probabilities[c];
-    }
-  }
-  // Pixels with no mass at all (or NaN) become uniform.
-  cv::Mat inverse_sum(size, CV_32FC1);
+  // Row by row, so that everything stays in cache and exp/log run vectorized over whole rows.
+  const size_t channels = planes.size();
+  const size_t w = static_cast<size_t>(size.width);
+  std::vector<float> p(channels * w), classes(kNumClasses * w), max_score(w), inverse_sum(w), spread(w);
+  std::vector<std::uint8_t> no_label(w);
+  cv::Mat out(size, CV_32FC(kNumClasses));
   for (int y = 0; y < size.height; ++y) {
-    const float* s = sum.ptr<float>(y);
-    float* inv = inverse_sum.ptr<float>(y);
-    for (int x = 0; x < size.width; ++x) inv[x] = (s[x] > 0.0f && std::isfinite(s[x])) ? 1.0f / s[x] : 0.0f;
-  }
-  // Class probabilities: mapped channels add; unmapped channels are spread evenly.
-  std::vector<cv::Mat> classes(kNumClasses);
-  for (cv::Mat& c : classes) c = cv::Mat::zeros(size, CV_32FC1);
-  cv::Mat spread = cv::Mat::zeros(size, CV_32FC1);
-  for (size_t c = 0; c < planes.size(); ++c) {
-    const std::uint8_t id = channel_to_train_id[c];
-    if (id < kNumClasses) {
-      classes[id] += probabilities[c];
+    for (size_t c = 0; c < channels; ++c) std::memcpy(&p[c * w], planes[c].ptr<float>(y), w * sizeof(float));
+    // Per-channel probabilities (unnormalized).
+    if (kind == ScoreKind::kLogits) {
+      std::copy(p.begin(), p.begin() + static_cast<std::ptrdiff_t>(w), max_score.begin());
+      for (size_t c = 1; c < channels; ++c) {
+        const float* row = &p[c * w];
+        for (size_t x = 0; x < w; ++x) max_score[x] = std::max(max_score[x], row[x]);
+      }
+      for (size_t c = 0; c < channels; ++c) {
+        float* row = &p[c * w];
+        for (size_t x = 0; x < w; ++x) row[x] -= max_score[x];
+      }
+    }
+    if (kind == ScoreKind::kProbabilities) {
+      for (float& v : p) v = v > 0.0f ? v : 0.0f;  // NaN too
     } else {
-      spread += probabilities[c];
+      cv::hal::exp32f(p.data(), p.data(), static_cast<int>(p.size()));
+    }
+    std::fill(inverse_sum.begin(), inverse_sum.end(), 0.0f);
+    for (size_t c = 0; c < channels; ++c) {
+      const float* row = &p[c * w];
+      for (size_t x = 0; x < w; ++x) inverse_sum[x] += row[x];
+    }
+    for (float& v : inverse_sum) v = (v > 0.0f && std::isfinite(v)) ? 1.0f / v : 0.0f;
+    // Class probabilities: mapped channels add; unmapped ones ("no class") are spread evenly, and where they outweigh
+    // every class the pixel has no label.
+    std::fill(classes.begin(), classes.end(), 0.0f);
+    std::fill(spread.begin(), spread.end(), 0.0f);
+    for (size_t c = 0; c < channels; ++c) {
+      const std::uint8_t id = channel_to_train_id[c];
+      float* target = id < kNumClasses ? &classes[id * w] : spread.data();
+      const float* row = &p[c * w];
+      for (size_t x = 0; x < w; ++x) target[x] += row[x];
+    }
+    std::copy(classes.begin(), classes.begin() + static_cast<std::ptrdiff_t>(w), max_score.begin());
+    for (size_t k = 1; k < static_cast<size_t>(kNumClasses); ++k) {
+      const float* row = &classes[k * w];
+      for (size_t x = 0; x < w; ++x) max_score[x] = std::max(max_score[x], row[x]);
+    }
+    for (size_t x = 0; x < w; ++x) {
+      no_label[x] = spread[x] > max_score[x] ? 1 : 0;
+      spread[x] *= 1.0f / kNumClasses;
+    }
+    for (size_t k = 0; k < static_cast<size_t>(kNumClasses); ++k) {
+      float* row = &classes[k * w];
+      for (size_t x = 0; x < w; ++x) {
+        // Uniform where nothing was known (no mass, or NaN).
+        const float v = inverse_sum[x] > 0.0f ? (row[x] + spread[x]) * inverse_sum[x] : 1.0f / kNumClasses;
+        row[x] = v > kMinObservationProbability ? v : kMinObservationProbability;
+      }
+    }
+    cv::hal::log32f(classes.data(), classes.data(), static_cast<int>(classes.size()));
+    float* dst = out.ptr<float>(y);
+    for (size_t x = 0; x < w; ++x, dst += kNumClasses) {
+      if (no_label[x]) {
+        std::fill(dst, dst + kNumClasses, 0.0f);
+        continue;
+      }
+      for (size_t k = 0; k < static_cast<size_t>(kNumClasses); ++k) dst[k] = std::min(classes[k * w + x], 0.0f);
     }
   }
-  spread *= 1.0 / kNumClasses;
-  cv::Mat no_mass = (inverse_sum == 0.0f);  // uniform where nothing was known
-  for (cv::Mat& c : classes) {
-    c += spread;
-    cv::multiply(c, inverse_sum, c);
-    c.setTo(1.0f / kNumClasses, no_mass);
-    cv::max(c, kMinObservationProbability, c);
-    cv::log(c, c);
-  }
-  cv::Mat merged;
-  cv::merge(classes, merged);
-  return Segmentation::FromLogProbabilities(std::move(merged), input_size);
+  return Segmentation::FromLogProbabilities(std::move(out), input_size);
 }
 
 }  // namespace semslam

@@ -43,9 +43,10 @@ class Segmentation {
 
   Segmentation() = default;
 
-  // `log_probabilities`: CV_32FC(19), normalized per pixel. It covers an input image of `input_size` (stretched
-  // over it when the sizes differ). Values are floored at kMinObservationLogProbability. Throws InvalidArgument
-  // on a wrong type or empty sizes.
+  // `log_probabilities`: CV_32FC(19), normalized per pixel; a pixel whose 19 values are all 0 has no label. It
+  // covers an input image of `input_size` (stretched over it when the sizes differ). Values are floored at
+  // kMinObservationLogProbability (in place: the buffer is taken over). Throws InvalidArgument on a wrong type or
+  // empty sizes.
   static Segmentation FromLogProbabilities(cv::Mat log_probabilities, cv::Size input_size);
   // `labels`: CV_8U trainIds (kNoLabel and any value >= 19 mean "no observation"). `confidence`: empty, or CV_8U
   // of the same size with the probability of the given label times 255 (replaces alpha per pixel; clamped to
@@ -119,7 +120,8 @@ class Segmentation {
 // Builds a log-probability segmentation from per-channel score planes (each CV_32F, all of one size) of a
 // network or a file. `channel_to_train_id[c]` is the trainId channel c stands for; several channels may map to
 // one class (their probabilities add), and channels mapped to kNoLabel ("unlabeled") spread their probability
-// evenly over the 19 classes: they say "no idea". Logits go through a softmax; probabilities are renormalized.
+// evenly over the 19 classes: they say "no idea"; where they outweigh every class (ENet's 'unlabeled' on the ego
+// vehicle, say) the pixel has no label at all. Logits go through a softmax; probabilities are renormalized.
 Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind kind,
                                     std::span<const std::uint8_t> channel_to_train_id, cv::Size input_size);
 

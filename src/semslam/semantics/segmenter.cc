@@ -15,7 +15,7 @@ namespace semslam {
 namespace {
 
 bool IsSettingKey(std::string_view key) {
-  static const char* const kKeys[] = {"alpha", "ids", "seed", "blobs", "blob_size", "threads"};
+  static const char* const kKeys[] = {"alpha", "ids", "seed", "blobs", "blob_size", "threads", "resize"};
   for (const char* k : kKeys) {
     if (key == k) return true;
   }
@@ -80,7 +80,7 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     return nullptr;
   }
   if (p.kind == "enet" || p.kind == "onnx" || p.kind == "card" || p.kind == "dnn") {
-    allow({"threads"});
+    allow({"threads", "resize"});
     need_argument(p.kind == "enet" ? "the model file (enet:FILE)" : "a model card (onnx:CARD.yaml)");
     DnnSegmenter::Options options;
     if (const auto* t = setting("threads")) options.threads = static_cast<int>(ParseNumber(*t, "threads"));
@@ -88,6 +88,10 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     const std::string ext = argument.extension().string();
     ModelCard card = (p.kind == "enet" && ext != ".yaml" && ext != ".yml") ? EnetCityscapesCard(argument)
                                                                              : ReadModelCard(argument);
+    if (const auto* r = setting("resize")) {
+      Require(*r == "stretch" || *r == "tile", "segmenter spec: resize must be 'stretch' or 'tile'");
+      card.resize = *r == "tile" ? ModelCard::Resize::kTile : ModelCard::Resize::kStretch;
+    }
     return std::make_unique<DnnSegmenter>(std::move(card), options);
   }
   if (p.kind == "labels") {

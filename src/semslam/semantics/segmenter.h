@@ -51,7 +51,8 @@ struct SegmenterContext {
 //   truth-noisy:RATE         -> context.truth_label_dir through the noise model (RATE in [0, 0.9])
 // followed by optional ",key=value" settings: alpha=A (confusion model, labels and truth-noisy; default 0.8 for
 // labels, 1 - RATE for truth-noisy), ids=train|label (labels: trainIds or Cityscapes labelIds), seed=N,
-// blobs=F (truth-noisy: share of the errors in blobs, default 0.5), threads=N (dnn: OpenCV threads, process-wide).
+// blobs=F (truth-noisy: share of the errors in blobs, default 0.5), blob_size=PX, threads=N (dnn: OpenCV threads,
+// process-wide), resize=stretch|tile (dnn with a fixed input size, see model_card.h).
 // Throws InvalidArgument naming the problem for a bad spec, InputError for a missing or bad file.
 std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterContext& context = {});
 

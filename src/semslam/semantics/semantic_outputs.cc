@@ -287,6 +287,19 @@ double SegmentationScore::MeanIou() const {
   return n ? sum / n : 0.0;
 }
 
+double SegmentationScore::MeanIouOverTruthClasses() const {
+  double sum = 0.0;
+  int n = 0;
+  for (int c = 0; c < kNumClasses; ++c) {
+    std::uint64_t in_truth = 0;
+    for (auto v : confusion_[static_cast<size_t>(c)]) in_truth += v;
+    if (in_truth == 0) continue;
+    sum += ClassIou(c).value_or(0.0);
+    ++n;
+  }
+  return n ? sum / n : 0.0;
+}
+
 cv::Mat ColorizeLabels(const cv::Mat& train_ids, const cv::Mat& image, double alpha) {
   Require(train_ids.type() == CV_8UC1, "ColorizeLabels: expected CV_8U trainIds");
   cv::Mat lut(1, 256, CV_8UC3, cv::Scalar(0, 0, 0));

@@ -70,8 +70,11 @@ class SegmentationScore {
   double PixelAccuracy() const;
   // IoU of a class; nullopt when the class appears in neither truth nor prediction.
   std::optional<double> ClassIou(int train_id) const;
-  // Mean IoU over the classes present in truth or prediction.
+  // Mean IoU over the classes present in truth or prediction (Cityscapes-style: a class predicted but absent from
+  // the truth counts with IoU 0).
   double MeanIou() const;
+  // Mean IoU over the classes present in the truth only.
+  double MeanIouOverTruthClasses() const;
   // Confusion count: truth class t predicted as p (p = 19: no prediction).
   std::uint64_t Count(int truth, int predicted) const;
 
