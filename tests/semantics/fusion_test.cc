@@ -222,6 +222,13 @@ TEST_F(KeyframeFusion, PerKeypointSamplesFuseLater) {
   EXPECT_EQ(car.Label(), 13);
   EXPECT_EQ(none.NumObservations(), 0);
 
+  // Dynamic-class probability of the samples: car 0.9 + 7 other dynamic classes at 0.1/18 each.
+  EXPECT_NEAR(DynamicProbability(&rows[kNumClasses]), 0.9 + 7 * 0.1 / 18, 1e-5);
+  EXPECT_NEAR(DynamicProbability(&rows[0]), 8 * 0.1 / 18, 1e-5);
+  EXPECT_EQ(DynamicProbability(&rows[2 * kNumClasses]), 0.0f);
+  EXPECT_NEAR(car.DynamicProbability(), 0.9 + 7 * 0.1 / 18, 1e-5);
+  EXPECT_EQ(none.DynamicProbability(), 0.0f);
+
   struct FakeKeypoint {
     Eigen::Vector2f pixel;
   };

@@ -166,6 +166,25 @@ int SampleAtPixels(const Segmentation& segmentation, std::span<const Eigen::Vect
   return SampleAtKeypoints(segmentation, pixels, [](const Eigen::Vector2f& p) { return p; }, log_probs);
 }
 
+float DynamicProbability(const float* log_probs) {
+  if (!IsSampledObservation(log_probs)) return 0.0f;
+  float all = 0.0f, dynamic = 0.0f;
+  for (int c = 0; c < kNumClasses; ++c) {
+    const float p = std::exp(log_probs[c]);
+    all += p;
+    if (IsDynamicClass(c)) dynamic += p;
+  }
+  return dynamic / all;
+}
+
+float LabelDistribution::DynamicProbability() const {
+  if (observations_ == 0) return 0.0f;
+  const auto p = Probabilities();
+  float dynamic = 0.0f;
+  for (int c = 0; c < kNumClasses; ++c) dynamic += IsDynamicClass(c) ? p[static_cast<size_t>(c)] : 0.0f;
+  return dynamic;
+}
+
 bool IsSampledObservation(const float* row) {
   for (int c = 0; c < kNumClasses; ++c) {
     if (row[c] != 0.0f) return true;

@@ -64,6 +64,8 @@ class LabelDistribution {
   float Confidence() const;
   int NumObservations() const { return static_cast<int>(observations_); }
   bool HasObservations() const { return observations_ > 0; }
+  // Posterior probability of the dynamic classes together (0 without observations).
+  float DynamicProbability() const;
   // Normalized posterior probabilities and log-probabilities.
   std::array<float, kNumClasses> Probabilities() const;
   ClassLogProbs NormalizedLogProbabilities() const;
@@ -138,6 +140,10 @@ int SampleAtKeypoints(const Segmentation& segmentation, const Keypoints& keypoin
   }
   return labeled;
 }
+// Probability that an observation (19 log-probabilities, e.g. a sampled row) is of a dynamic class (person, rider,
+// vehicles): for keeping features on moving things out of tracking and relocalization. 0 for a "none" row.
+float DynamicProbability(const float* log_probs);
+
 // Whether a sampled row holds an observation (is not the all-zero "none" row).
 bool IsSampledObservation(const float* row);
 // Fuses a sampled row (from SampleAtPixels) into `distribution`; false (nothing done) for a "none" row.
