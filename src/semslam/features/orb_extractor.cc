@@ -242,6 +242,14 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
     for (const auto& s : level.strips) total += s.size();
     level.candidates.reserve(total + 64);
     for (const auto& s : level.strips) level.candidates.insert(level.candidates.end(), s.begin(), s.end());
+    // Masked pixels get no keypoint; a cell whose corners are all masked counts as empty.
+    auto masked = [&](const CornerCandidate& c) {
+      const int mx = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0X(c.x, static_cast<int>(l)))), 0, mask.cols - 1);
+      const int my = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0Y(c.y, static_cast<int>(l)))), 0, mask.rows - 1);
+      return mask.at<std::uint8_t>(my, mx) == 0;
+    };
+    if (!mask.empty()) std::erase_if(level.candidates, masked);
+    const size_t first_low = level.candidates.size();
     if (options_.min_fast_threshold < options_.initial_fast_threshold) {
       const int w = level.x1 - level.x0, h = level.y1 - level.y0;
       const int cols = std::max(1, (w + options_.cell_size / 2) / options_.cell_size);
@@ -264,11 +272,9 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
       }
     }
     if (!mask.empty()) {
-      std::erase_if(level.candidates, [&](const CornerCandidate& c) {
-        const int mx = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0X(c.x, static_cast<int>(l)))), 0, mask.cols - 1);
-        const int my = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0Y(c.y, static_cast<int>(l)))), 0, mask.rows - 1);
-        return mask.at<std::uint8_t>(my, mx) == 0;
-      });
+      level.candidates.erase(std::remove_if(level.candidates.begin() + static_cast<std::ptrdiff_t>(first_low),
+                                            level.candidates.end(), masked),
+                             level.candidates.end());
     }
   });
 

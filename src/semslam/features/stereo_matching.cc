@@ -21,6 +21,7 @@ void StereoMatchOptions::Check() const {
   Require(patch_half_size >= 1 && patch_half_size <= 15, "stereo matching: patch_half_size must be in [1, 15]");
   Require(search_half_range >= 1 && search_half_range <= 32, "stereo matching: search_half_range must be in [1, 32]");
   Require(outlier_factor > 0.0f, "stereo matching: outlier_factor must be positive");
+  Require(ratio > 0.0f && ratio <= 1.0f, "stereo matching: ratio must be in (0, 1]");
 }
 
 namespace {
@@ -129,7 +130,7 @@ StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const
       if (kr.pixel.x() < min_u || kr.pixel.x() > max_u) continue;
       best.Offer(j, HammingDistance(left.descriptors[i], right.descriptors[static_cast<size_t>(j)]));
     }
-    if (!best.found() || best.best > options.max_descriptor_distance) return;
+    if (!best.found() || best.best > options.max_descriptor_distance || !best.PassesRatio(options.ratio)) return;
 
     // Sub-pixel refinement on the left keypoint's level.
     const int level = kl.level;
@@ -155,9 +156,17 @@ StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const
     if (best_shift == -range || best_shift == range) return;  // minimum at the border: not bracketed
     const float c_minus = costs[best_shift + range - 1], c0 = costs[best_shift + range],
                 c_plus = costs[best_shift + range + 1];
-    const float curvature = c_minus - 2.0f * c0 + c_plus;
-    if (!(curvature > 0.0f)) return;
-    const float delta = 0.5f * (c_minus - c_plus) / curvature;
+    float delta = 0.0f;
+    if (options.subpixel_fit == StereoMatchOptions::SubpixelFit::kParabola) {
+      const float curvature = c_minus - 2.0f * c0 + c_plus;
+      if (!(curvature > 0.0f)) return;
+      delta = 0.5f * (c_minus - c_plus) / curvature;
+    } else {
+      // Lines through the minimum and its higher neighbour, mirrored: they cross at the sub-pixel minimum.
+      const float slope = std::max(c_minus, c_plus) - c0;
+      if (!(slope > 0.0f)) return;
+      delta = 0.5f * (c_minus - c_plus) / slope;
+    }
     if (std::abs(delta) > 1.0f) return;
     const float ur_level = static_cast<float>(xr + best_shift) + delta;
     const float ur = right_pyramid.ToLevel0X(ur_level, level);

@@ -20,11 +20,18 @@ struct StereoMatchOptions {
   // Nearest depth searched, in metres; <= 0 means one baseline (the disparity limit is then fx).
   double min_depth = 0.0;
   int max_descriptor_distance = (MatcherThresholds::kHigh + MatcherThresholds::kLow) / 2;
+  // Nearest / second-nearest descriptor distance among the row candidates (1 turns the test off). Repeated
+  // structure (windows, fences) gives near ties; the test drops those ambiguous matches.
+  float ratio = 0.9f;
   float row_band = 2.0f;             // rows searched: |v_right - v_left| <= row_band * scale(level)
   int max_level_difference = 1;      // right keypoint's level within this of the left's
   int patch_half_size = 5;           // correlation patch (2h+1)^2 on the keypoint's level
   int search_half_range = 5;         // level pixels searched each side of the descriptor match
   float outlier_factor = 2.1f;       // drop matches whose cost exceeds this times the median cost
+  // Sub-pixel offset from the costs c(-1), c(0), c(+1) around the minimum: a parabola through them, or two
+  // lines of opposite slope ("equiangular", Shimizu & Okutomi 2005), the exact model for SAD costs.
+  enum class SubpixelFit { kParabola, kEquiangular };
+  SubpixelFit subpixel_fit = SubpixelFit::kEquiangular;
   bool parallel = true;
   void Check() const;
 };
