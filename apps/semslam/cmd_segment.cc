@@ -70,7 +70,8 @@ std::vector<fs::path> ExpandImages(const std::vector<std::string>& args) {
 // The frame number in a file name such as 000123.png; `fallback` when the stem is not a number.
 std::int64_t FrameIndexOf(const fs::path& image, std::int64_t fallback) {
   const std::string stem = image.stem().string();
-  if (stem.empty() || stem.size() > 12 || !std::all_of(stem.begin(), stem.end(), ::isdigit)) return fallback;
+  const auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  if (stem.empty() || stem.size() > 12 || !std::all_of(stem.begin(), stem.end(), digit)) return fallback;
   return std::stoll(stem);
 }
 

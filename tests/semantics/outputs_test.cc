@@ -71,6 +71,19 @@ TEST(SemanticPly, ReaderRejectsBrokenFiles) {
   EXPECT_THROW(ReadSemanticPly(dir / "missing.ply"), InputError);
 }
 
+TEST(SemanticOutputs, PointFromDistribution) {
+  LabelDistribution d;
+  EXPECT_EQ(ToSemanticPoint(Eigen::Vector3d(1, 2, 3), d).label, kNoLabel);
+  EXPECT_EQ(ToSemanticPoint(Eigen::Vector3d(1, 2, 3), d).confidence, 0.0f);
+  d.FuseLabel(8, 0.7f);
+  d.FuseLabel(8, 0.7f);
+  const SemanticPoint p = ToSemanticPoint(Eigen::Vector3d(1, 2, 3), d);
+  EXPECT_EQ(p.position, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(p.label, 8);
+  EXPECT_EQ(p.observations, 2);
+  EXPECT_FLOAT_EQ(p.confidence, d.Confidence());
+}
+
 TEST(SemanticOutputs, CountsAndPointAccuracy) {
   const auto points = SomePoints();
   const ClassCounts counts = CountLabels(points);

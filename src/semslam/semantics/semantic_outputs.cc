@@ -66,6 +66,15 @@ void Assign(SemanticPoint& point, const std::string& name, double value) {
 
 }  // namespace
 
+SemanticPoint ToSemanticPoint(const Eigen::Vector3d& position, const LabelDistribution& labels) {
+  SemanticPoint p;
+  p.position = position;
+  p.label = labels.Label();
+  p.confidence = labels.HasObservations() ? labels.Confidence() : 0.0f;
+  p.observations = labels.NumObservations();
+  return p;
+}
+
 void WriteSemanticPly(const std::filesystem::path& path, std::span<const SemanticPoint> points, PlyFormat format) {
   std::string out;
   out.reserve(300 + points.size() * (format == PlyFormat::kBinary ? 24 : 64));

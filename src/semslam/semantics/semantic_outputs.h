@@ -14,6 +14,7 @@
 
 #include "semslam/geometry/eigen_types.h"
 #include "semslam/semantics/class_table.h"
+#include "semslam/semantics/label_fusion.h"
 
 namespace semslam {
 
@@ -23,6 +24,9 @@ struct SemanticPoint {
   float confidence = 0.0f;       // posterior of the label
   int observations = 0;          // segmentations fused into it
 };
+
+// A map point's position and fused labels as written to the PLY (label kNoLabel while unobserved).
+SemanticPoint ToSemanticPoint(const Eigen::Vector3d& position, const LabelDistribution& labels);
 
 enum class PlyFormat { kBinary, kAscii };
 
