@@ -35,6 +35,11 @@ struct ImagePyramid {
 // an empty or non-CV_8UC1 image.
 ImagePyramid BuildImagePyramid(const cv::Mat& grey, const PyramidGeometry& geometry);
 
+// Step by step: InitImagePyramid sets level 0 and sizes the vectors; BuildImagePyramidLevel(l) makes level l
+// from level l - 1 (so levels can be processed while later ones are being built).
+void InitImagePyramid(const cv::Mat& grey, const PyramidGeometry& geometry, ImagePyramid& pyramid);
+void BuildImagePyramidLevel(const PyramidGeometry& geometry, size_t level, ImagePyramid& pyramid);
+
 // Size of level `level` for a level-0 image of `size`.
 cv::Size PyramidLevelSize(cv::Size size, float scale);
 

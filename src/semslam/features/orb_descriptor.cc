@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
 namespace semslam {
@@ -68,31 +69,55 @@ float IntensityCentroidAngle(const cv::Mat& image, int x, int y) {
   return angle;
 }
 
+namespace {
+
+// The pattern as float arrays, so that steering all 256 tests vectorizes.
+struct SteeringTable {
+  alignas(32) float x1[256], y1[256], x2[256], y2[256];
+  explicit SteeringTable(const BriefPattern& pattern) {
+    for (size_t i = 0; i < 256; ++i) {
+      x1[i] = pattern[i].x1;
+      y1[i] = pattern[i].y1;
+      x2[i] = pattern[i].x2;
+      y2[i] = pattern[i].y2;
+    }
+  }
+};
+
+// Nearest integer of |v| < 100 without a library call: truncation of a positive number is its floor.
+inline int RoundSmall(float v) { return static_cast<int>(v + 128.5f) - 128; }
+
+}  // namespace
+
 Descriptor ComputeSteeredBrief(const cv::Mat& smoothed, int x, int y, float angle_deg, const BriefPattern& pattern) {
+  static const SteeringTable kDefaultTable(SemslamBriefPattern());
+  const bool is_default = &pattern == &SemslamBriefPattern();
+  std::optional<SteeringTable> own;
+  if (!is_default) own.emplace(pattern);
+  const SteeringTable& t = is_default ? kDefaultTable : *own;
+
   const float radians = angle_deg * static_cast<float>(std::numbers::pi / 180.0);
   const float c = std::cos(radians);
   const float s = std::sin(radians);
   const int step = static_cast<int>(smoothed.step1());
   const std::uint8_t* center = smoothed.ptr<std::uint8_t>(y) + x;
-  // Rotated point p' = R(angle) p, rounded to the nearest pixel; as offsets from the centre pixel.
-  std::array<int, 512> offsets;
+  // Rotated point p' = R(angle) p, rounded to the nearest pixel, as offsets from the centre pixel.
+  alignas(32) int first[256];
+  alignas(32) int second[256];
   for (size_t i = 0; i < 256; ++i) {
-    const BriefPair& p = pattern[i];
-    const float x1 = p.x1, y1 = p.y1, x2 = p.x2, y2 = p.y2;
-    const int u1 = static_cast<int>(std::floor(x1 * c - y1 * s + 0.5f));
-    const int v1 = static_cast<int>(std::floor(x1 * s + y1 * c + 0.5f));
-    const int u2 = static_cast<int>(std::floor(x2 * c - y2 * s + 0.5f));
-    const int v2 = static_cast<int>(std::floor(x2 * s + y2 * c + 0.5f));
-    offsets[2 * i] = v1 * step + u1;
-    offsets[2 * i + 1] = v2 * step + u2;
+    const int u1 = RoundSmall(t.x1[i] * c - t.y1[i] * s);
+    const int v1 = RoundSmall(t.x1[i] * s + t.y1[i] * c);
+    const int u2 = RoundSmall(t.x2[i] * c - t.y2[i] * s);
+    const int v2 = RoundSmall(t.x2[i] * s + t.y2[i] * c);
+    first[i] = v1 * step + u1;
+    second[i] = v2 * step + u2;
   }
   Descriptor d{};
   for (size_t word = 0; word < 4; ++word) {
     std::uint64_t bits = 0;
-    const int* o = offsets.data() + word * 128;
-    for (int b = 0; b < 64; ++b) {
-      bits |= static_cast<std::uint64_t>(center[o[2 * b]] < center[o[2 * b + 1]]) << b;
-    }
+    const int* a = first + word * 64;
+    const int* b = second + word * 64;
+    for (int k = 0; k < 64; ++k) bits |= static_cast<std::uint64_t>(center[a[k]] < center[b[k]]) << k;
     d[word] = bits;
   }
   return d;

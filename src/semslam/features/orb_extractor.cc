@@ -2,8 +2,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <numeric>
@@ -149,13 +151,25 @@ std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates,
   const int cols = std::max(1, static_cast<int>(std::ceil(width / side)));
   const int rows = std::max(1, static_cast<int>(std::ceil(height / side)));
   const float inv_w = static_cast<float>(cols) / width, inv_h = static_cast<float>(rows) / height;
-  // Strongest first (ties by index, for determinism).
+  // Strongest first (ties by index, for determinism). FAST scores are integers in [0, 255]: a counting
+  // sort then; anything else sorts by key.
   std::vector<int> order(static_cast<size_t>(n));
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](int a, int b) {
-    const float ra = candidates[static_cast<size_t>(a)].response, rb = candidates[static_cast<size_t>(b)].response;
-    return ra > rb || (ra == rb && a < b);
+  const bool small_integers = std::all_of(candidates.begin(), candidates.end(), [](const CornerCandidate& c) {
+    return c.response >= 0.0f && c.response <= 255.0f && c.response == std::floor(c.response);
   });
+  if (small_integers) {
+    std::array<int, 257> start{};
+    for (const CornerCandidate& c : candidates) ++start[255 - static_cast<size_t>(c.response) + 1];
+    for (size_t b = 0; b < 256; ++b) start[b + 1] += start[b];
+    for (int i = 0; i < n; ++i) {
+      order[static_cast<size_t>(start[255 - static_cast<size_t>(candidates[static_cast<size_t>(i)].response)]++)] = i;
+    }
+  } else {
+    std::vector<std::pair<float, int>> keyed(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) keyed[static_cast<size_t>(i)] = {-candidates[static_cast<size_t>(i)].response, i};
+    std::sort(keyed.begin(), keyed.end());
+    for (int i = 0; i < n; ++i) order[static_cast<size_t>(i)] = keyed[static_cast<size_t>(i)].second;
+  }
   // Round of each candidate = how many stronger candidates share its cell.
   std::vector<int> cell_count(static_cast<size_t>(cols * rows), 0);
   std::vector<int> round(static_cast<size_t>(n));
@@ -199,40 +213,57 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
   Require(mask.empty() || (mask.type() == CV_8UC1 && mask.size() == grey.size()),
           "ORB: mask must be CV_8UC1 with the image's size");
 
-  ImagePyramid pyramid = BuildImagePyramid(grey, geometry_);
   const size_t num_levels = static_cast<size_t>(geometry_.num_levels);
   const int border = options_.edge_threshold;
   std::vector<Level> levels(num_levels);
-  std::vector<Task> tasks;
-  for (size_t l = 0; l < num_levels; ++l) {
+  ImagePyramid pyramid;
+  InitImagePyramid(grey, geometry_, pyramid);
+
+  // 1. Smoothing and FAST at the initial threshold, per level and strip; a level's tasks start as soon as
+  // the level is built, while the next levels are being resized.
+  auto run_task = [&](const Task& task) {
+    Level& level = levels[static_cast<size_t>(task.level)];
+    if (task.strip < 0) {
+      if (options_.pattern == OrbDescriptorPattern::kSemslam) SmoothForDescriptor(level.image, level.smoothed);
+      return;
+    }
+    const int s = task.strip;
+    const int h = level.y1 - level.y0;
+    const int sy0 = level.y0 + h * s / level.num_strips, sy1 = level.y0 + h * (s + 1) / level.num_strips;
+    std::vector<cv::KeyPoint> scratch;
+    DetectFast(level.image, level.x0, sy0, level.x1, sy1, options_.initial_fast_threshold, scratch,
+               level.strips[static_cast<size_t>(s)]);
+  };
+  auto prepare_level = [&](size_t l, std::vector<Task>& tasks) {
+    BuildImagePyramidLevel(geometry_, l, pyramid);
     Level& level = levels[l];
     level.image = pyramid.levels[l];
     level.x0 = border;
     level.y0 = border;
     level.x1 = level.image.cols - border;
     level.y1 = level.image.rows - border;
-    if (!level.usable()) continue;
+    tasks.clear();
+    if (!level.usable()) return;
     const int area = (level.x1 - level.x0) * (level.y1 - level.y0);
     level.num_strips = std::clamp(area / kStripPixels, 1, std::max(1, (level.y1 - level.y0) / 16));
     level.strips.resize(static_cast<size_t>(level.num_strips));
     tasks.push_back({static_cast<int>(l), -1});
     for (int s = 0; s < level.num_strips; ++s) tasks.push_back({static_cast<int>(l), s});
-  }
-
-  // 1. Smoothing and FAST at the initial threshold, per level and strip.
-  ForEach(options_.parallel, tasks.size(), [&](size_t t) {
-    Level& level = levels[static_cast<size_t>(tasks[t].level)];
-    if (tasks[t].strip < 0) {
-      if (options_.pattern == OrbDescriptorPattern::kSemslam) SmoothForDescriptor(level.image, level.smoothed);
-      return;
+  };
+  std::vector<Task> tasks;
+  if (options_.parallel) {
+    tbb::task_group group;
+    for (size_t l = 0; l < num_levels; ++l) {
+      prepare_level(l, tasks);
+      for (const Task& task : tasks) group.run([&run_task, task] { run_task(task); });
     }
-    const int s = tasks[t].strip;
-    const int h = level.y1 - level.y0;
-    const int sy0 = level.y0 + h * s / level.num_strips, sy1 = level.y0 + h * (s + 1) / level.num_strips;
-    std::vector<cv::KeyPoint> scratch;
-    DetectFast(level.image, level.x0, sy0, level.x1, sy1, options_.initial_fast_threshold, scratch,
-               level.strips[static_cast<size_t>(s)]);
-  });
+    group.wait();
+  } else {
+    for (size_t l = 0; l < num_levels; ++l) {
+      prepare_level(l, tasks);
+      for (const Task& task : tasks) run_task(task);
+    }
+  }
 
   // 2. Per level: merge strips, lower the threshold in cells without corners, apply the mask.
   ForEach(options_.parallel, num_levels, [&](size_t l) {
