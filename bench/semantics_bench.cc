@@ -1,16 +1,15 @@
 // Semantics benchmarks: label fusion per keyframe (bar: <= 50 us for 1000 observed points; the paper's data
-// association took 500 us), per-keypoint sampling, turning network scores into distributions, the noise model, and
-// ENet at its native 1024x512 with 2 OpenCV threads (needs ../shared/data).
+// association took 500 us), per-keypoint sampling, turning network scores into distributions, the noise
+// model, and ENet at its native 1024x512 with 2 OpenCV threads (needs ../shared/data).
 //   build/<preset>/bench/semantics_bench [--benchmark_filter=Fuse]
 
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
-#include <random>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <vector>
 
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/rigid3.h"
@@ -35,7 +34,8 @@ PinholeCamera KittiCamera() {
   return camera;
 }
 
-// A segmentation like ENet's on a KITTI frame: 19 log-probabilities per pixel at 1024x512, over a 1241x376 image.
+// A segmentation like ENet's on a KITTI frame: 19 log-probabilities per pixel at 1024x512, over a 1241x376
+// image.
 Segmentation ProbabilitySegmentation(std::mt19937& rng) {
   std::vector<cv::Mat> planes(20);
   for (cv::Mat& p : planes) {
@@ -69,10 +69,13 @@ Scene MakeScene(int n, const PinholeCamera& camera, std::mt19937& rng) {
   scene.camera_from_world = world_from_camera.Inverse();
   std::uniform_real_distribution<double> u(0, camera.width - 1), v(0, camera.height - 1), depth(2, 60);
   for (int i = 0; i < n; ++i) {
-    scene.points.push_back(world_from_camera * camera.UnprojectDepth(Eigen::Vector2d(u(rng), v(rng)), depth(rng)));
+    scene.points.push_back(world_from_camera *
+                           camera.UnprojectDepth(Eigen::Vector2d(u(rng), v(rng)), depth(rng)));
   }
   scene.distributions.resize(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) scene.observations.push_back({scene.points[static_cast<size_t>(i)], &scene.distributions[static_cast<size_t>(i)]});
+  for (int i = 0; i < n; ++i)
+    scene.observations.push_back(
+        {scene.points[static_cast<size_t>(i)], &scene.distributions[static_cast<size_t>(i)]});
   return scene;
 }
 
@@ -140,7 +143,8 @@ void BM_SegmentationFromScores_Enet(benchmark::State& state) {
   std::vector<std::uint8_t> mapping = {kNoLabel};
   for (int c = 0; c < kNumClasses; ++c) mapping.push_back(static_cast<std::uint8_t>(c));
   for (auto _ : state) {
-    benchmark::DoNotOptimize(SegmentationFromScores(planes, ScoreKind::kLogits, mapping, cv::Size(1241, 376)));
+    benchmark::DoNotOptimize(
+        SegmentationFromScores(planes, ScoreKind::kLogits, mapping, cv::Size(1241, 376)));
   }
 }
 BENCHMARK(BM_SegmentationFromScores_Enet)->Unit(benchmark::kMillisecond);

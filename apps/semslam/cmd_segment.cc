@@ -1,17 +1,15 @@
-// semslam segment: run a segmenter on images, write colourized labels, print JSON (class histogram; pixel accuracy
-// and mIoU against ground truth when given).
+// semslam segment: run a segmenter on images, write colourized labels, print JSON (class histogram; pixel
+// accuracy and mIoU against ground truth when given).
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
@@ -126,7 +124,8 @@ void RunSegment(const SegmentArgs& args) {
   } else if (!args.truth.empty()) {
     for (const auto& t : args.truth) truth_files.emplace_back(t);
     Require(truth_files.size() == images.size(), "--truth lists " + std::to_string(truth_files.size()) +
-                                                     " files for " + std::to_string(images.size()) + " images");
+                                                     " files for " + std::to_string(images.size()) +
+                                                     " images");
   }
 
   SegmenterContext context;
@@ -151,7 +150,8 @@ void RunSegment(const SegmentArgs& args) {
     const cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
     if (image.empty()) throw InputError(path, "cannot decode the image");
     const Stopwatch watch;
-    const Segmentation segmentation = segmenter->Segment(image, FrameIndexOf(path, static_cast<std::int64_t>(i)));
+    const Segmentation segmentation =
+        segmenter->Segment(image, FrameIndexOf(path, static_cast<std::int64_t>(i)));
     const double elapsed = watch.ElapsedMs();
     ms.push_back(elapsed);
     const cv::Mat labels = segmentation.LabelsAtInputSize();
@@ -178,7 +178,8 @@ void RunSegment(const SegmentArgs& args) {
     if (!args.out.empty()) {
       const std::string stem = path.stem().string();
       const fs::path color_path = out_dir / (stem + "_labels.png");
-      WriteFileAtomically(color_path, EncodePng(ColorizeLabels(labels, args.overlay ? image : cv::Mat()), color_path));
+      WriteFileAtomically(color_path,
+                          EncodePng(ColorizeLabels(labels, args.overlay ? image : cv::Mat()), color_path));
       const fs::path ids_path = out_dir / (stem + "_trainids.png");
       WriteFileAtomically(ids_path, EncodePng(labels, ids_path));
       entry["labels_png"] = color_path.string();
@@ -192,8 +193,11 @@ void RunSegment(const SegmentArgs& args) {
   nlohmann::json result = {
       {"segmenter", segmenter->Describe()},
       {"images", images.size()},
-      {"ms_per_image", {{"median", timing.median_ms}, {"mean", timing.mean_ms}, {"max", timing.max_ms},
-                        {"first", ms.empty() ? 0.0 : ms.front()}}},
+      {"ms_per_image",
+       {{"median", timing.median_ms},
+        {"mean", timing.mean_ms},
+        {"max", timing.max_ms},
+        {"first", ms.empty() ? 0.0 : ms.front()}}},
       {"class_histogram", Histogram(histogram)},
   };
   if (total_score.pixels() > 0) {
@@ -218,17 +222,22 @@ void RunSegment(const SegmentArgs& args) {
 void AddSegmentCommand(CLI::App& app) {
   auto args = std::make_shared<SegmentArgs>();
   auto* cmd = app.add_subcommand("segment", "Run a segmenter on images (and score it against ground truth)");
-  cmd->add_option("--segmenter", args->segmenter,
-                  "enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with optional ,key=value settings")
+  cmd->add_option(
+         "--segmenter", args->segmenter,
+         "enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with optional ,key=value settings")
       ->required();
-  cmd->add_option("--images", args->images, "Image files or folders (sorted); frame numbers come from the names")
+  cmd->add_option("--images", args->images,
+                  "Image files or folders (sorted); frame numbers come from the names")
       ->required();
-  cmd->add_option("--truth", args->truth,
-                  "Ground-truth trainId images: one folder (same names, or Cityscapes gtFine names) or one file per "
-                  "image");
-  cmd->add_option("--truth-ids", args->truth_ids, "What the ground truth holds: train (trainIds) or label (labelIds)")
+  cmd->add_option(
+      "--truth", args->truth,
+      "Ground-truth trainId images: one folder (same names, or Cityscapes gtFine names) or one file per "
+      "image");
+  cmd->add_option("--truth-ids", args->truth_ids,
+                  "What the ground truth holds: train (trainIds) or label (labelIds)")
       ->check(CLI::IsMember({"train", "label"}));
-  cmd->add_option("--out", args->out, "Folder for <name>_labels.png (colourized), <name>_trainids.png, segment.json");
+  cmd->add_option("--out", args->out,
+                  "Folder for <name>_labels.png (colourized), <name>_trainids.png, segment.json");
   cmd->add_flag("--overlay", args->overlay, "Blend the colourized labels over the image");
   cmd->add_option("--seed", args->seed, "Seed for truth-noisy");
   cmd->callback([args] { RunSegment(*args); });

@@ -1,14 +1,13 @@
 // `semslam segment` end to end: JSON on stdout, colourized PNGs, scores against ground truth, errors.
 
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <fstream>
-#include <string>
-
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "support/test_support.h"
 
@@ -49,11 +48,13 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
   truth.rowRange(60, 120).setTo(0);
   truth(cv::Rect(100, 20, 120, 80)).setTo(2);
   for (int f = 0; f < 3; ++f) {
-    ASSERT_TRUE(cv::imwrite((dir / "image_0" / cv::format("%06d.png", f)).string(), cv::Mat(120, 400, CV_8UC1, cv::Scalar(90))));
+    ASSERT_TRUE(cv::imwrite((dir / "image_0" / cv::format("%06d.png", f)).string(),
+                            cv::Mat(120, 400, CV_8UC1, cv::Scalar(90))));
     ASSERT_TRUE(cv::imwrite((dir / "label_0" / cv::format("%06d.png", f)).string(), truth));
   }
-  const CommandResult r = RunSemslam("segment --segmenter truth-noisy:0.2 --images " + (dir / "image_0").string() +
-                              " --truth " + (dir / "label_0").string() + " --out " + (dir / "out").string());
+  const CommandResult r =
+      RunSemslam("segment --segmenter truth-noisy:0.2 --images " + (dir / "image_0").string() + " --truth " +
+                 (dir / "label_0").string() + " --out " + (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.out;
   const auto json = nlohmann::json::parse(r.out);
   EXPECT_EQ(json["images"], 3);
@@ -70,7 +71,8 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "segment.json"));
 
   // The sequence's label_0 next to image_0 is found without --truth.
-  const CommandResult sibling = RunSemslam("segment --segmenter truth-noisy:0 --images " + (dir / "image_0").string());
+  const CommandResult sibling =
+      RunSemslam("segment --segmenter truth-noisy:0 --images " + (dir / "image_0").string());
   ASSERT_EQ(sibling.status, 0);
   EXPECT_NEAR(nlohmann::json::parse(sibling.out)["class_histogram"]["sky"].get<double>(), 0.4, 1e-9);
 }
@@ -78,14 +80,17 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
 TEST_F(SegmentCommand, OnnxCardAndErrors) {
   testing::TempDir dir;
   ASSERT_TRUE(cv::imwrite((dir / "red.png").string(), cv::Mat(8, 16, CV_8UC3, cv::Scalar(0, 0, 255))));
-  const CommandResult r = RunSemslam("segment --segmenter onnx:" SEMSLAM_SEMANTICS_TEST_DATA "/tiny_segnet.yaml --images " +
-                              (dir / "red.png").string());
+  const CommandResult r =
+      RunSemslam("segment --segmenter onnx:" SEMSLAM_SEMANTICS_TEST_DATA "/tiny_segnet.yaml --images " +
+                 (dir / "red.png").string());
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_NEAR(nlohmann::json::parse(r.out)["class_histogram"]["road"].get<double>(), 1.0, 1e-9);
   EXPECT_NE(RunSemslam("segment --segmenter bogus:1 --images " + (dir / "red.png").string()).status, 0);
-  EXPECT_NE(RunSemslam("segment --segmenter labels:/nonexistent --images " + (dir / "red.png").string()).status, 0);
+  EXPECT_NE(
+      RunSemslam("segment --segmenter labels:/nonexistent --images " + (dir / "red.png").string()).status, 0);
   EXPECT_NE(RunSemslam("segment --segmenter none --images " + (dir / "red.png").string()).status, 0);
-  EXPECT_NE(RunSemslam("segment --segmenter truth-noisy:0.1 --images " + (dir / "missing.png").string()).status, 0);
+  EXPECT_NE(
+      RunSemslam("segment --segmenter truth-noisy:0.1 --images " + (dir / "missing.png").string()).status, 0);
 }
 
 }  // namespace

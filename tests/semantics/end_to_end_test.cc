@@ -1,18 +1,17 @@
-// Simulated end to end: ~2000 map points with known classes in a small analytic street, observed by 15 keyframes
-// whose segmentations are the true label images through truth-noisy:0.25 (single frames 75 % right). Bayesian
-// fusion must label >= 95 % of the points right.
+// Simulated end to end: ~2000 map points with known classes in a small analytic street, observed by 15
+// keyframes whose segmentations are the true label images through truth-noisy:0.25 (single frames 75 %
+// right). Bayesian fusion must label >= 95 % of the points right.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <random>
 #include <vector>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "semslam/semantics/label_fusion.h"
 #include "semslam/semantics/segmenter.h"
@@ -27,8 +26,9 @@ struct Box {
   int label;
 };
 
-// A straight street (world = first camera: x right, y down, z forward; the ground at y = 1.65): road, sidewalks,
-// terrain, facades on both sides (building / vegetation / fence / wall by stretch), parked cars, poles with signs.
+// A straight street (world = first camera: x right, y down, z forward; the ground at y = 1.65): road,
+// sidewalks, terrain, facades on both sides (building / vegetation / fence / wall by stretch), parked cars,
+// poles with signs.
 class Street {
  public:
   Street() {
@@ -57,8 +57,9 @@ class Street {
     if (d.y() > 0) {
       const double t = (kGround - o.y()) / d.y();
       const double x = std::abs(o.x() + t * d.x());
-      consider(t, x < 3.5 ? TrainId(SemanticClass::kRoad)
-                          : x < 6.5 ? TrainId(SemanticClass::kSidewalk) : TrainId(SemanticClass::kTerrain));
+      consider(t, x < 3.5   ? TrainId(SemanticClass::kRoad)
+                  : x < 6.5 ? TrainId(SemanticClass::kSidewalk)
+                            : TrainId(SemanticClass::kTerrain));
     }
     for (double side : {-1.0, 1.0}) {
       if (d.x() * side <= 0) continue;
@@ -89,8 +90,9 @@ class Street {
   static int FacadeClass(double side, double z) {
     const double m = std::fmod(std::max(z, 0.0), 24.0);
     if (side < 0) return m < 15 ? TrainId(SemanticClass::kBuilding) : TrainId(SemanticClass::kVegetation);
-    return m < 12 ? TrainId(SemanticClass::kBuilding) : m < 17 ? TrainId(SemanticClass::kFence)
-                                                                : TrainId(SemanticClass::kWall);
+    return m < 12   ? TrainId(SemanticClass::kBuilding)
+           : m < 17 ? TrainId(SemanticClass::kFence)
+                    : TrainId(SemanticClass::kWall);
   }
   static constexpr double kGround = 1.65, kFacade = 9.0, kFacadeTop = -10.0;
   std::vector<Box> boxes_;
@@ -118,7 +120,8 @@ TEST(SemanticsEndToEnd, FusedLabelsBeatNoisySingleFrames) {
     const double yaw = 0.05 * std::sin(0.7 * k);
     const Eigen::Vector3d center(0.3 * std::sin(0.4 * k), 0.0, 2.0 * k);
     Keyframe& kf = keyframes[static_cast<size_t>(k)];
-    kf.world_from_camera = Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())), center);
+    kf.world_from_camera =
+        Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY())), center);
     kf.labels = cv::Mat(camera.height, camera.width, CV_8UC1, cv::Scalar(TrainId(SemanticClass::kSky)));
     kf.depth = cv::Mat(camera.height, camera.width, CV_32FC1, cv::Scalar(0.0f));
     const Eigen::Matrix3d r = kf.world_from_camera.rotation.toRotationMatrix();
@@ -191,29 +194,32 @@ TEST(SemanticsEndToEnd, FusedLabelsBeatNoisySingleFrames) {
   for (size_t i = 0; i < points.size(); ++i) {
     semantic[i] = {points[i].position, fused[i].Label(), fused[i].Confidence(), fused[i].NumObservations()};
   }
-  const LabelAccuracy accuracy = EvaluatePointLabels(semantic, [&](const Eigen::Vector3d& p) -> std::optional<int> {
-    for (const Point& q : points) {
-      if (q.position == p) return q.truth;
-    }
-    return std::nullopt;
-  });
+  const LabelAccuracy accuracy =
+      EvaluatePointLabels(semantic, [&](const Eigen::Vector3d& p) -> std::optional<int> {
+        for (const Point& q : points) {
+          if (q.position == p) return q.truth;
+        }
+        return std::nullopt;
+      });
   int single_all = 0, single_all_right = 0;
   std::printf("%-14s %6s %12s %12s\n", "class", "points", "single-frame", "fused");
   for (int c = 0; c < kNumClasses; ++c) {
     if (single_total[static_cast<size_t>(c)] == 0) continue;
     single_all += single_total[static_cast<size_t>(c)];
     single_all_right += single_right[static_cast<size_t>(c)];
-    std::printf("%-14s %6llu %12.3f %12.3f\n", std::string(ClassName(c)).c_str(),
-                static_cast<unsigned long long>(accuracy.class_evaluated[static_cast<size_t>(c)]),
-                static_cast<double>(single_right[static_cast<size_t>(c)]) / single_total[static_cast<size_t>(c)],
-                accuracy.ClassAccuracy(c).value_or(0.0));
+    std::printf(
+        "%-14s %6llu %12.3f %12.3f\n", std::string(ClassName(c)).c_str(),
+        static_cast<unsigned long long>(accuracy.class_evaluated[static_cast<size_t>(c)]),
+        static_cast<double>(single_right[static_cast<size_t>(c)]) / single_total[static_cast<size_t>(c)],
+        accuracy.ClassAccuracy(c).value_or(0.0));
   }
   const double single = static_cast<double>(single_all_right) / single_all;
   std::printf("%-14s %6llu %12.3f %12.3f   (%.1f observations per point, %llu unobserved)\n", "all",
               static_cast<unsigned long long>(accuracy.evaluated), single, accuracy.Accuracy(),
               static_cast<double>(total_observations) / static_cast<double>(points.size()),
               static_cast<unsigned long long>(accuracy.unlabeled));
-  // A SLAM map keeps points seen by at least 3 keyframes; points seen once or twice cannot out-vote a wrong label.
+  // A SLAM map keeps points seen by at least 3 keyframes; points seen once or twice cannot out-vote a wrong
+  // label.
   int kept = 0, kept_right = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     if (fused[i].NumObservations() < 3) continue;

@@ -42,8 +42,8 @@ TEST(LabelDistribution, OneObservationIsThePosterior) {
 }
 
 // Observations (road, sidewalk, the 17 others): (0.6, 0.3, 0.1/17 each) and (0.2, 0.7, 0.1/17 each).
-// Products: road 0.12, sidewalk 0.21, others (0.1/17)^2 = 3.4602e-5 each; Z = 0.33 + 17 * 3.4602e-5 = 0.3305882.
-// Posterior: road 0.3629893, sidewalk 0.6352313, each other 1.0466820e-4.
+// Products: road 0.12, sidewalk 0.21, others (0.1/17)^2 = 3.4602e-5 each; Z = 0.33 + 17 * 3.4602e-5 =
+// 0.3305882. Posterior: road 0.3629893, sidewalk 0.6352313, each other 1.0466820e-4.
 TEST(LabelDistribution, TwoObservationsMatchHandComputedPosterior) {
   LabelDistribution d;
   d.Fuse(Observation({{0, 0.6}, {1, 0.3}}));
@@ -60,9 +60,9 @@ TEST(LabelDistribution, TwoObservationsMatchHandComputedPosterior) {
 }
 
 // Confusion model alpha = 0.8 (others 0.2/18 = 0.011111): labels road, road, car.
-// Products: road 0.8^2 * 0.011111 = 7.11111e-3, car 0.011111^2 * 0.8 = 9.87654e-5, others 0.011111^3 = 1.37174e-6;
-// Z = 7.11111e-3 + 9.87654e-5 + 17 * 1.37174e-6 = 7.23320e-3.
-// Posterior: road 0.9831216, car 0.0136545, each other 1.896454e-4.
+// Products: road 0.8^2 * 0.011111 = 7.11111e-3, car 0.011111^2 * 0.8 = 9.87654e-5, others 0.011111^3
+// = 1.37174e-6; Z = 7.11111e-3 + 9.87654e-5 + 17 * 1.37174e-6 = 7.23320e-3. Posterior: road 0.9831216, car
+// 0.0136545, each other 1.896454e-4.
 TEST(LabelDistribution, ThreeLabelObservationsWithConfusionModel) {
   LabelDistribution d;
   d.FuseLabel(0, 0.8f);
@@ -112,7 +112,8 @@ TEST(LabelDistribution, ManyObservationsStayFinite) {
   }
 }
 
-// Merging two points' posteriors (uniform prior, independent observations) equals fusing all observations into one.
+// Merging two points' posteriors (uniform prior, independent observations) equals fusing all observations
+// into one.
 TEST(LabelDistribution, MergeEqualsFusingAllObservations) {
   const ClassLogProbs o1 = Observation({{0, 0.6}, {1, 0.3}});
   const ClassLogProbs o2 = Observation({{0, 0.2}, {1, 0.7}});
@@ -158,8 +159,8 @@ TEST(LabelDistribution, SerializationRoundTrip) {
   EXPECT_THROW(LabelDistribution::ReadFrom(short_reader), InputError);
 }
 
-// A 100x50 camera looking down +z; the segmentation says road on the left half and car on the right half, stored at
-// half resolution (50x25) to exercise the mapping back to input pixels.
+// A 100x50 camera looking down +z; the segmentation says road on the left half and car on the right half,
+// stored at half resolution (50x25) to exercise the mapping back to input pixels.
 class KeyframeFusion : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -182,12 +183,12 @@ TEST_F(KeyframeFusion, ProjectsSamplesAndFuses) {
   const Rigid3d camera_from_world(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 10));
   std::vector<LabelDistribution> d(6);
   const std::vector<PointObservation> points = {
-      {Eigen::Vector3d(-2, 0, 0), &d[0]},      // u = 50 * -2/10 + 49.5 = 39.5: road
-      {Eigen::Vector3d(3, 1, 0), &d[1]},       // u = 64.5: car
-      {Eigen::Vector3d(0, 0, -20), &d[2]},     // behind the camera
-      {Eigen::Vector3d(30, 0, 0), &d[3]},      // u = 199.5: outside
+      {Eigen::Vector3d(-2, 0, 0), &d[0]},        // u = 50 * -2/10 + 49.5 = 39.5: road
+      {Eigen::Vector3d(3, 1, 0), &d[1]},         // u = 64.5: car
+      {Eigen::Vector3d(0, 0, -20), &d[2]},       // behind the camera
+      {Eigen::Vector3d(30, 0, 0), &d[3]},        // u = 199.5: outside
       {Eigen::Vector3d(-9.8, -4.85, 0), &d[4]},  // pixel (0.5, 0.25): the unlabeled corner
-      {Eigen::Vector3d(1, 1, 0), nullptr},     // skipped
+      {Eigen::Vector3d(1, 1, 0), nullptr},       // skipped
   };
   const FusionStats stats = FuseKeyframeObservations(segmentation, camera_from_world, camera, points);
   EXPECT_EQ(stats.fused, 2);
@@ -233,7 +234,9 @@ TEST_F(KeyframeFusion, PerKeypointSamplesFuseLater) {
     Eigen::Vector2f pixel;
   };
   const std::vector<FakeKeypoint> keypoints = {{{80.0f, 10.0f}}};
-  EXPECT_EQ(SampleAtKeypoints(segmentation, keypoints, [](const FakeKeypoint& k) { return k.pixel; }, &rows), 1);
+  EXPECT_EQ(SampleAtKeypoints(
+                segmentation, keypoints, [](const FakeKeypoint& k) { return k.pixel; }, &rows),
+            1);
   EXPECT_NEAR(std::exp(rows[13]), 0.9, 1e-6);
 }
 

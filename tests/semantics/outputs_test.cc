@@ -1,9 +1,9 @@
-// Semantic point cloud PLY, per-class counts, map-point label accuracy, segmentation scores, colourized labels.
+// Semantic point cloud PLY, per-class counts, map-point label accuracy, segmentation scores, colourized
+// labels.
 
 #include <gtest/gtest.h>
 
 #include <fstream>
-
 #include <opencv2/core.hpp>
 
 #include "semslam/core/error.h"
@@ -38,14 +38,17 @@ TEST(SemanticPly, BinaryAndAsciiRoundTrip) {
     }
   }
   // No temporary files are left behind, and the header names the properties.
-  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()), 2);
+  EXPECT_EQ(
+      std::distance(std::filesystem::directory_iterator(dir.path()), std::filesystem::directory_iterator()),
+      2);
   std::ifstream in(dir / "map_ascii.ply");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("property uchar red"), std::string::npos);
   EXPECT_NE(text.find("property uchar label"), std::string::npos);
   EXPECT_NE(text.find("property float confidence"), std::string::npos);
   EXPECT_NE(text.find("property int observations"), std::string::npos);
-  EXPECT_NE(text.find("\n1.5 -2.25 10.125 128 64 128 0 0.95 7\n"), std::string::npos);  // road: palette colour
+  EXPECT_NE(text.find("\n1.5 -2.25 10.125 128 64 128 0 0.95 7\n"),
+            std::string::npos);  // road: palette colour
 
   std::vector<SemanticPoint> bad = points;
   bad[1].position.x() = NAN;
@@ -57,8 +60,9 @@ TEST(SemanticPly, ReaderRejectsBrokenFiles) {
   testing::TempDir dir;
   std::ofstream(dir / "a.ply") << "not a ply\n";
   EXPECT_THROW(ReadSemanticPly(dir / "a.ply"), InputError);
-  std::ofstream(dir / "b.ply") << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                                  "property float z\nend_header\n1 2 3\n4 5\n";
+  std::ofstream(dir / "b.ply")
+      << "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+         "property float z\nend_header\n1 2 3\n4 5\n";
   try {
     ReadSemanticPly(dir / "b.ply");
     FAIL();

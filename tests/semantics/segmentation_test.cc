@@ -1,16 +1,16 @@
 // Segmentation storage and sampling, scores -> distributions, the class table.
 
+#include "semslam/semantics/segmentation.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <span>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
 #include "semslam/core/error.h"
 #include "semslam/semantics/class_table.h"
-#include "semslam/semantics/segmentation.h"
 
 namespace semslam {
 namespace {
@@ -62,7 +62,7 @@ TEST(Segmentation, LabelsMapBackToInputPixels) {
   EXPECT_EQ(s.storage_size(), cv::Size(4, 2));
   EXPECT_EQ(s.LabelAt(0, 0), 0);
   EXPECT_EQ(s.LabelAt(1.4f, 1.4f), 0);
-  EXPECT_EQ(s.LabelAt(1.6f, 1.4f), 1);   // sub-pixel: x = 1.6 lies in input pixel 2, stored column 1
+  EXPECT_EQ(s.LabelAt(1.6f, 1.4f), 1);  // sub-pixel: x = 1.6 lies in input pixel 2, stored column 1
   EXPECT_EQ(s.LabelAt(7.0f, 0.0f), 3);
   EXPECT_EQ(s.LabelAt(5.0f, 3.0f), 13);
   EXPECT_EQ(s.LabelAt(7.0f, 3.0f), kNoLabel);
@@ -100,10 +100,12 @@ TEST(Segmentation, PerPixelConfidenceReplacesAlpha) {
   EXPECT_THROW(Segmentation::FromLabels(cv::Mat(1, 2, CV_16UC1), cv::Size(2, 1), 0.5f), InvalidArgument);
 }
 
-// Logits (unlabeled 0, road 1, car 2): softmax = (0.0900306, 0.2447285, 0.6652410); the unlabeled share is spread over
-// the 19 classes (0.0900306 / 19 = 0.0047385 each): road 0.2494669, car 0.6699794, every other class 0.0047385.
+// Logits (unlabeled 0, road 1, car 2): softmax = (0.0900306, 0.2447285, 0.6652410); the unlabeled share is
+// spread over the 19 classes (0.0900306 / 19 = 0.0047385 each): road 0.2494669, car 0.6699794, every other
+// class 0.0047385.
 TEST(Segmentation, ScoresBecomeClassDistributions) {
-  std::vector<cv::Mat> planes = {cv::Mat(2, 3, CV_32FC1, cv::Scalar(0.0f)), cv::Mat(2, 3, CV_32FC1, cv::Scalar(1.0f)),
+  std::vector<cv::Mat> planes = {cv::Mat(2, 3, CV_32FC1, cv::Scalar(0.0f)),
+                                 cv::Mat(2, 3, CV_32FC1, cv::Scalar(1.0f)),
                                  cv::Mat(2, 3, CV_32FC1, cv::Scalar(2.0f))};
   const std::vector<std::uint8_t> mapping = {kNoLabel, 0, 13};
   const Segmentation s = SegmentationFromScores(planes, ScoreKind::kLogits, mapping, cv::Size(6, 4));
@@ -121,7 +123,8 @@ TEST(Segmentation, ScoresBecomeClassDistributions) {
   EXPECT_NEAR(s.Confidence().at<float>(1, 2), 0.6699794, 1e-5);
 
   // Probabilities that do not sum to 1 are renormalized; two channels of one class add up.
-  std::vector<cv::Mat> probs = {cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.2f)), cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.2f)),
+  std::vector<cv::Mat> probs = {cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.2f)),
+                                cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.2f)),
                                 cv::Mat(1, 1, CV_32FC1, cv::Scalar(0.4f))};
   const std::vector<std::uint8_t> two_roads = {0, 0, 10};
   const Segmentation q = SegmentationFromScores(probs, ScoreKind::kProbabilities, two_roads, cv::Size(1, 1));
@@ -130,13 +133,15 @@ TEST(Segmentation, ScoresBecomeClassDistributions) {
   EXPECT_NEAR(std::exp(p[10]), 0.5, 1e-6);
   EXPECT_NEAR(std::exp(p[1]), kMinObservationProbability, 1e-8);  // floored
 
-  EXPECT_THROW(SegmentationFromScores(planes, ScoreKind::kLogits, std::span(two_roads).subspan(0, 2), cv::Size(1, 1)),
-               InvalidArgument);
+  EXPECT_THROW(
+      SegmentationFromScores(planes, ScoreKind::kLogits, std::span(two_roads).subspan(0, 2), cv::Size(1, 1)),
+      InvalidArgument);
 }
 
 TEST(Segmentation, CompactedKeepsLabelsAndConfidence) {
   std::vector<cv::Mat> planes(kNumClasses);
-  for (int c = 0; c < kNumClasses; ++c) planes[static_cast<size_t>(c)] = cv::Mat(4, 4, CV_32FC1, cv::Scalar(0.0f));
+  for (int c = 0; c < kNumClasses; ++c)
+    planes[static_cast<size_t>(c)] = cv::Mat(4, 4, CV_32FC1, cv::Scalar(0.0f));
   planes[3].setTo(3.0f);
   planes[7].colRange(2, 4).setTo(5.0f);
   std::vector<std::uint8_t> mapping(kNumClasses);

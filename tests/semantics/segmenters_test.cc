@@ -1,22 +1,21 @@
-// Segmenter backends: ENet on a real KITTI frame, a tiny ONNX network, model cards, label and probability files,
-// the ground-truth noise model, and the spec factory.
+// Segmenter backends: ENet on a real KITTI frame, a tiny ONNX network, model cards, label and probability
+// files, the ground-truth noise model, and the spec factory.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <vector>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 #include "semslam/core/error.h"
 #include "semslam/semantics/dnn_segmenter.h"
 #include "semslam/semantics/label_image_segmenter.h"
 #include "semslam/semantics/model_card.h"
-#include "semslam/semantics/semantic_outputs.h"
 #include "semslam/semantics/segmenter.h"
+#include "semslam/semantics/semantic_outputs.h"
 #include "support/test_support.h"
 
 namespace semslam {
@@ -88,7 +87,8 @@ TEST(ModelCard, ParsesFieldsAndReportsErrorsWithLines) {
   EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {std: [1, 0, 1]}\n", "/m", "/m/c.yaml"), InputError);
   EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {fixed: true}\n", "/m", "/m/c.yaml"), InputError);
   EXPECT_THROW(ParseModelCard("file: [unclosed\n", "/m", "/m/c.yaml"), InputError);
-  EXPECT_EQ(ParseModelCard("file: a.onnx\ninput: {width: 4, height: 2, fixed: true, resize: tile}\n", "/m", "/m/c.yaml")
+  EXPECT_EQ(ParseModelCard("file: a.onnx\ninput: {width: 4, height: 2, fixed: true, resize: tile}\n", "/m",
+                           "/m/c.yaml")
                 .resize,
             ModelCard::Resize::kTile);
   EXPECT_THROW(ParseModelCard("file: a.onnx\ninput: {resize: tile}\n", "/m", "/m/c.yaml"), InputError);
@@ -108,11 +108,11 @@ TEST(DnnSegmenter, TinyOnnxNetworkFollowsTheCard) {
   const Segmentation s = segmenter.Segment(image);
   EXPECT_EQ(s.input_size(), cv::Size(32, 16));
   EXPECT_EQ(s.storage_size(), cv::Size(16, 8));
-  EXPECT_EQ(s.LabelAt(3, 8), 0);     // red -> road (so the card's RGB order was applied)
-  EXPECT_EQ(s.LabelAt(12, 8), 13);   // green -> car
-  EXPECT_EQ(s.LabelAt(20, 2), 10);   // blue -> sky
-  // Red: normalized (1, -1, -1), logits (0, 4, -4, -4): softmax road = e^4 / (1 + e^4 + 2 e^-4) = 0.98137, plus
-  // the unlabeled share 0.017974 / 19.
+  EXPECT_EQ(s.LabelAt(3, 8), 0);    // red -> road (so the card's RGB order was applied)
+  EXPECT_EQ(s.LabelAt(12, 8), 13);  // green -> car
+  EXPECT_EQ(s.LabelAt(20, 2), 10);  // blue -> sky
+  // Red: normalized (1, -1, -1), logits (0, 4, -4, -4): softmax road = e^4 / (1 + e^4 + 2 e^-4) = 0.98137,
+  // plus the unlabeled share 0.017974 / 19.
   ClassLogProbs p;
   ASSERT_TRUE(s.Sample(Eigen::Vector2d(0, 0), &p));
   EXPECT_NEAR(std::exp(p[0]), 0.98137 + 0.017974 / 19, 2e-4);
@@ -157,8 +157,8 @@ TEST(DnnSegmenter, TiledWindowsKeepTheAspectRatio) {
   card.resize = ModelCard::Resize::kTile;
   DnnSegmenter segmenter(card);
   EXPECT_NE(segmenter.Describe().find("tiled"), std::string::npos);
-  cv::Mat image(16, 64, CV_8UC3, cv::Scalar(0, 0, 255));     // red: road
-  image.colRange(40, 64).setTo(cv::Scalar(255, 0, 0));         // blue: sky
+  cv::Mat image(16, 64, CV_8UC3, cv::Scalar(0, 0, 255));  // red: road
+  image.colRange(40, 64).setTo(cv::Scalar(255, 0, 0));    // blue: sky
   const Segmentation s = segmenter.Segment(image);
   EXPECT_EQ(s.input_size(), cv::Size(64, 16));
   EXPECT_EQ(s.storage_size(), cv::Size(32, 8));
@@ -172,7 +172,8 @@ TEST(DnnSegmenter, TiledWindowsKeepTheAspectRatio) {
   ASSERT_TRUE(o.Sample(Eigen::Vector2d(10, 8), &p));
   EXPECT_NEAR(std::exp(p[0]), 0.98137 + 0.017974 / 19, 2e-4);
   // Narrower than the network: plain stretch.
-  EXPECT_EQ(segmenter.Segment(cv::Mat(16, 24, CV_8UC3, cv::Scalar(0, 0, 255))).storage_size(), cv::Size(16, 8));
+  EXPECT_EQ(segmenter.Segment(cv::Mat(16, 24, CV_8UC3, cv::Scalar(0, 0, 255))).storage_size(),
+            cv::Size(16, 8));
 }
 
 TEST(DnnSegmenter, EnetOnKittiFrame) {
@@ -190,8 +191,8 @@ TEST(DnnSegmenter, EnetOnKittiFrame) {
   const int rows = labels.rows;
   const auto bottom = ClassShares(labels, rows * 4 / 5, rows);
   const auto top = ClassShares(labels, 0, rows / 5);
-  std::cout << "ENet on KITTI 07 frame 50: bottom fifth road " << bottom[0] << ", top fifth building " << top[2]
-            << ", sky " << top[10] << ", vegetation " << top[8] << "\n";
+  std::cout << "ENet on KITTI 07 frame 50: bottom fifth road " << bottom[0] << ", top fifth building "
+            << top[2] << ", sky " << top[10] << ", vegetation " << top[8] << "\n";
   EXPECT_EQ(Dominant(bottom), TrainId(SemanticClass::kRoad));
   EXPECT_GT(bottom[0], 0.4);
   const int top_class = Dominant(top);
@@ -250,8 +251,8 @@ TEST(LabelImageSegmenter, LabelIdsTrainIdsAndProbabilities) {
   // Probabilities from any network as .npy (H x W x 19) take precedence over the PNG.
   std::vector<float> probs(2 * 4 * 19, 0.0f);
   for (int i = 0; i < 8; ++i) {
-    probs[static_cast<size_t>(i * 19 + 2)] = 0.7f;   // building
-    probs[static_cast<size_t>(i * 19 + 8)] = 0.3f;   // vegetation
+    probs[static_cast<size_t>(i * 19 + 2)] = 0.7f;  // building
+    probs[static_cast<size_t>(i * 19 + 8)] = 0.3f;  // vegetation
   }
   WriteNpy(dir / "000003.npy", probs, 2, 4, 19);
   const Segmentation n = by_label_ids->Segment(image, 3);
@@ -285,7 +286,8 @@ double NeighbourWrongGivenWrong(const cv::Mat& noisy, const cv::Mat& truth) {
   double wrong = 0, both = 0;
   for (int y = 0; y < truth.rows; ++y) {
     for (int x = 0; x + 1 < truth.cols; ++x) {
-      if (truth.at<std::uint8_t>(y, x) >= kNumClasses || truth.at<std::uint8_t>(y, x + 1) >= kNumClasses) continue;
+      if (truth.at<std::uint8_t>(y, x) >= kNumClasses || truth.at<std::uint8_t>(y, x + 1) >= kNumClasses)
+        continue;
       if (noisy.at<std::uint8_t>(y, x) == truth.at<std::uint8_t>(y, x)) continue;
       ++wrong;
       if (noisy.at<std::uint8_t>(y, x + 1) != truth.at<std::uint8_t>(y, x + 1)) ++both;
@@ -302,7 +304,7 @@ TEST(LabelNoise, ErrorRateBlobsSaltAndDeterminism) {
     const cv::Mat noisy = AddLabelNoise(truth, options, 7);
     EXPECT_NEAR(Accuracy(noisy, truth), 1.0 - rate, 0.01) << rate;
     EXPECT_EQ(cv::countNonZero((truth == kNoLabel) != (noisy == kNoLabel)), 0);  // no-class pixels stay
-    EXPECT_EQ(cv::countNonZero(noisy != AddLabelNoise(truth, options, 7)), 0);    // deterministic
+    EXPECT_EQ(cv::countNonZero(noisy != AddLabelNoise(truth, options, 7)), 0);   // deterministic
     EXPECT_GT(cv::countNonZero(noisy != AddLabelNoise(truth, options, 8)), 0);
   }
   LabelNoiseOptions salt, blobs;
@@ -362,8 +364,11 @@ TEST(MakeSegmenter, SpecsAndErrors) {
   EXPECT_THROW(MakeSegmenter("labels:" + kTestData.string() + ",alpha=2"), InvalidArgument);
   EXPECT_THROW(MakeSegmenter("enet:"), InvalidArgument);
   EXPECT_THROW(MakeSegmenter("enet:/nonexistent/enet-model.net"), InputError);
-  EXPECT_THROW(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=crop"), InvalidArgument);
-  EXPECT_NE(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=tile")->Describe().find("tiled"),
+  EXPECT_THROW(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=crop"),
+               InvalidArgument);
+  EXPECT_NE(MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string() + ",resize=tile")
+                ->Describe()
+                .find("tiled"),
             std::string::npos);
   auto onnx = MakeSegmenter("onnx:" + (kTestData / "tiny_segnet.yaml").string());
   ASSERT_NE(onnx, nullptr);

@@ -1,15 +1,15 @@
-// The asynchronous segmentation worker: never blocks the caller, takes the newest keyframe when behind, delivers
-// every result it computes.
+// The asynchronous segmentation worker: never blocks the caller, takes the newest keyframe when behind,
+// delivers every result it computes.
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <set>
 #include <stdexcept>
 #include <thread>
-#include <atomic>
 #include <vector>
 
 #include "semslam/core/error.h"
@@ -18,7 +18,8 @@
 namespace semslam {
 namespace {
 
-// A segmenter that blocks until released, labels everything with (frame_index % 19), and throws for frame 666.
+// A segmenter that blocks until released, labels everything with (frame_index % 19), and throws for frame
+// 666.
 class GatedSegmenter : public Segmenter {
  public:
   std::string Describe() const override { return "gated"; }
@@ -29,8 +30,8 @@ class GatedSegmenter : public Segmenter {
     changed_.wait(lock, [&] { return open_ || released_ > 0; });
     if (!open_) --released_;
     if (frame_index == 666) throw std::runtime_error("broken frame");
-    return Segmentation::FromLabels(cv::Mat(image.size(), CV_8UC1, cv::Scalar(static_cast<int>(frame_index % 19))),
-                                    image.size(), 0.9f);
+    return Segmentation::FromLabels(
+        cv::Mat(image.size(), CV_8UC1, cv::Scalar(static_cast<int>(frame_index % 19))), image.size(), 0.9f);
   }
   void WaitStarted(size_t n) {
     std::unique_lock lock(mutex_);
@@ -85,7 +86,7 @@ TEST(SegmentationWorker, TakesTheNewestWhenBehindAndDeliversEveryResult) {
   worker.Submit(4, image, 40);
   EXPECT_LT(std::chrono::steady_clock::now() - before, std::chrono::milliseconds(100));
   EXPECT_TRUE(worker.Busy());
-  segmenter->Release();      // finishes 1; the worker then takes 4
+  segmenter->Release();  // finishes 1; the worker then takes 4
   segmenter->WaitStarted(2);
   segmenter->Release();
   worker.WaitUntilIdle();
@@ -124,7 +125,7 @@ TEST(SegmentationWorker, KeepsAWindowOfPendingAndSurvivesFailures) {
   segmenter->WaitStarted(1);
   worker.Submit(2, image, 2);
   worker.Submit(3, image, 3);
-  worker.Submit(4, image, 4);   // the window keeps 3 and 4; 2 is dropped
+  worker.Submit(4, image, 4);  // the window keeps 3 and 4; 2 is dropped
   segmenter->Open();
   worker.WaitUntilIdle();
   worker.Submit(9, image, 9);
@@ -143,7 +144,8 @@ TEST(SegmentationWorker, StopDrainsOrSkipsPending) {
     std::atomic<int> delivered{0};
     SegmentationWorker::Options options;
     options.max_pending = 3;
-    SegmentationWorker worker(segmenter, [&](SegmentationResult&&) { ++delivered; }, options);
+    SegmentationWorker worker(
+        segmenter, [&](SegmentationResult&&) { ++delivered; }, options);
     const cv::Mat image(2, 2, CV_8UC1, cv::Scalar(0));
     worker.Submit(1, image, 1);
     segmenter->WaitStarted(1);

@@ -29,17 +29,17 @@ constexpr std::array<ClassInfo, kNumClasses> kClasses = {{
 }};
 
 constexpr std::array<std::string_view, kNumClasses> kKeys = {
-    "road",       "sidewalk", "building", "wall",   "fence",  "pole",  "traffic_light",
-    "traffic_sign", "vegetation", "terrain", "sky", "person", "rider", "car",
-    "truck",      "bus",      "train",    "motorcycle", "bicycle"};
+    "road",         "sidewalk",   "building", "wall",       "fence",  "pole",  "traffic_light",
+    "traffic_sign", "vegetation", "terrain",  "sky",        "person", "rider", "car",
+    "truck",        "bus",        "train",    "motorcycle", "bicycle"};
 
 // Cityscapes labelIds 0..33 in order (unlabeled, ego vehicle, rectification border, out of roi, static,
 // dynamic, ground, road, sidewalk, parking, rail track, building, wall, fence, guard rail, bridge, tunnel,
 // pole, polegroup, traffic light, traffic sign, vegetation, terrain, sky, person, rider, car, truck, bus,
 // caravan, trailer, train, motorcycle, bicycle) and their trainIds.
 constexpr std::array<std::uint8_t, 34> kLabelIdToTrainId = {
-    255, 255, 255, 255, 255, 255, 255, 0,  1,  255, 255, 2,  3,  4,  255, 255, 255,
-    5,   255, 6,   7,   8,   9,   10,  11, 12, 13,  14,  15, 255, 255, 16, 17,  18};
+    255, 255, 255, 255, 255, 255, 255, 0,  1,  255, 255, 2,  3,   4,   255, 255, 255,
+    5,   255, 6,   7,   8,   9,   10,  11, 12, 13,  14,  15, 255, 255, 16,  17,  18};
 
 std::string Normalize(std::string_view name) {
   std::string out;

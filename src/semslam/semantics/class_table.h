@@ -56,7 +56,8 @@ inline bool IsValidTrainId(int id) { return id >= 0 && id < kNumClasses; }
 std::string_view ClassName(int train_id);
 // The palette colour; black for kNoLabel and anything out of range.
 Rgb ClassColor(int train_id);
-// Whether the class can move (person, rider, car, truck, bus, train, motorcycle, bicycle). False for kNoLabel.
+// Whether the class can move (person, rider, car, truck, bus, train, motorcycle, bicycle). False for
+// kNoLabel.
 bool IsDynamicClass(int train_id);
 // trainId of a class name: case-insensitive, '_' or ' ' or nothing between words ("traffic_light",
 // "TrafficLight"). nullopt when unknown.

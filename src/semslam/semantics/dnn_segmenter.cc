@@ -1,12 +1,11 @@
 #include "semslam/semantics/dnn_segmenter.h"
 
-#include <opencv2/core.hpp>
-#include <opencv2/dnn.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "semslam/core/error.h"
@@ -46,7 +45,9 @@ std::string DnnSegmenter::Describe() const {
     << (card_.ResolvedFormat() == ModelCard::Format::kTorch ? "torch" : "onnx") << ", input ";
   if (card_.input_width > 0) {
     s << card_.input_width << "x" << card_.input_height
-      << (card_.fixed_size ? (card_.resize == ModelCard::Resize::kTile ? " fixed, tiled" : " fixed, stretched") : "");
+      << (card_.fixed_size
+              ? (card_.resize == ModelCard::Resize::kTile ? " fixed, tiled" : " fixed, stretched")
+              : "");
   } else {
     s << "image size";
   }
@@ -159,21 +160,25 @@ std::vector<cv::Mat> DnnSegmenter::ScorePlanes(cv::Mat& output) const {
   const size_t num_channels = card_.channel_to_train_id.size();
   const std::vector<int> shape = OutputShape(output);
   if (output.depth() != CV_32F || shape.size() != 3) {
-    throw InputError(card_.file, "output of shape " + ShapeText(shape) + ", expected 1xCxHxW or 1xHxWxC float scores");
+    throw InputError(card_.file,
+                     "output of shape " + ShapeText(shape) + ", expected 1xCxHxW or 1xHxWxC float scores");
   }
   std::vector<cv::Mat> planes;
   if (card_.layout == ModelCard::Layout::kNchw) {
     if (static_cast<size_t>(shape[0]) != num_channels) {
-      throw InputError(card_.file, "output has " + std::to_string(shape[0]) + " channels but the model card lists " +
-                                       std::to_string(num_channels) + " classes");
+      throw InputError(card_.file, "output has " + std::to_string(shape[0]) +
+                                       " channels but the model card lists " + std::to_string(num_channels) +
+                                       " classes");
     }
     float* data = output.ptr<float>();
     const size_t plane_size = static_cast<size_t>(shape[1]) * static_cast<size_t>(shape[2]);
-    for (size_t c = 0; c < num_channels; ++c) planes.emplace_back(shape[1], shape[2], CV_32FC1, data + c * plane_size);
+    for (size_t c = 0; c < num_channels; ++c)
+      planes.emplace_back(shape[1], shape[2], CV_32FC1, data + c * plane_size);
   } else {
     if (static_cast<size_t>(shape[2]) != num_channels) {
-      throw InputError(card_.file, "output has " + std::to_string(shape[2]) + " channels but the model card lists " +
-                                       std::to_string(num_channels) + " classes");
+      throw InputError(card_.file, "output has " + std::to_string(shape[2]) +
+                                       " channels but the model card lists " + std::to_string(num_channels) +
+                                       " classes");
     }
     cv::Mat interleaved(shape[0], shape[1], CV_32FC(static_cast<int>(num_channels)), output.ptr<float>());
     cv::split(interleaved, planes);
@@ -185,10 +190,10 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
   Require(!image.empty(), "DnnSegmenter: empty image");
   const size_t num_channels = card_.channel_to_train_id.size();
   const cv::Size net_size(card_.input_width, card_.input_height);
-  const int tiled_width = card_.resize == ModelCard::Resize::kTile
-                              ? static_cast<int>(std::lround(image.cols * static_cast<double>(net_size.height) /
-                                                             image.rows))
-                              : 0;
+  const int tiled_width =
+      card_.resize == ModelCard::Resize::kTile
+          ? static_cast<int>(std::lround(image.cols * static_cast<double>(net_size.height) / image.rows))
+          : 0;
   if (tiled_width > net_size.width) {
     // Keep the aspect ratio: scale to the network's height, run overlapping windows across, average.
     cv::Mat scaled;
@@ -199,8 +204,8 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
     cv::Mat count;
     double out_scale = 1.0;
     for (int w = 0; w < windows; ++w) {
-      const int x0 = static_cast<int>(std::lround(static_cast<double>(w) * (tiled_width - net_size.width) /
-                                                  std::max(windows - 1, 1)));
+      const int x0 = static_cast<int>(
+          std::lround(static_cast<double>(w) * (tiled_width - net_size.width) / std::max(windows - 1, 1)));
       cv::Mat output = Forward(scaled.colRange(x0, x0 + net_size.width));
       const std::vector<cv::Mat> p = ToProbabilities(ScorePlanes(output), card_.scores);
       if (sum.empty()) {

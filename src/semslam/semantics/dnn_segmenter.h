@@ -1,6 +1,7 @@
 #pragma once
-// A CNN through OpenCV's dnn module (CPU), described by a model card: Torch7 .net files (ENet) and ONNX exports
-// (PSPNet, BiSeNet, DDRNet, ...). Keeps the network's output resolution and maps it back to the input image.
+// A CNN through OpenCV's dnn module (CPU), described by a model card: Torch7 .net files (ENet) and ONNX
+// exports (PSPNet, BiSeNet, DDRNet, ...). Keeps the network's output resolution and maps it back to the input
+// image.
 
 #include <memory>
 #include <string>

@@ -9,8 +9,8 @@
 
 namespace semslam {
 
-LabelDistribution LabelDistribution::FromLogProbabilities(std::span<const float, kNumClasses> log_probabilities,
-                                                          std::uint32_t num_observations) {
+LabelDistribution LabelDistribution::FromLogProbabilities(
+    std::span<const float, kNumClasses> log_probabilities, std::uint32_t num_observations) {
   LabelDistribution d;
   for (int c = 0; c < kNumClasses; ++c) {
     const float v = log_probabilities[static_cast<size_t>(c)];
@@ -34,7 +34,8 @@ void LabelDistribution::FuseLabel(int label, float alpha) {
 }
 
 void LabelDistribution::Merge(const LabelDistribution& other) {
-  for (int c = 0; c < kNumClasses; ++c) log_p_[static_cast<size_t>(c)] += other.log_p_[static_cast<size_t>(c)];
+  for (int c = 0; c < kNumClasses; ++c)
+    log_p_[static_cast<size_t>(c)] += other.log_p_[static_cast<size_t>(c)];
   observations_ += other.observations_;
   Renormalize();
 }
@@ -62,7 +63,8 @@ std::array<float, kNumClasses> LabelDistribution::Probabilities() const {
   const ClassLogProbs relative = RelativeLogProbabilities();
   std::array<float, kNumClasses> p;
   float sum = 0.0f;
-  for (int c = 0; c < kNumClasses; ++c) sum += p[static_cast<size_t>(c)] = std::exp(relative[static_cast<size_t>(c)]);
+  for (int c = 0; c < kNumClasses; ++c)
+    sum += p[static_cast<size_t>(c)] = std::exp(relative[static_cast<size_t>(c)]);
   for (float& v : p) v /= sum;
   return p;
 }
@@ -105,7 +107,8 @@ LabelDistribution LabelDistribution::FromBytes(std::string_view bytes) {
   std::uint32_t observations = 0;
   std::memcpy(values.data(), bytes.data(), kNumClasses * sizeof(float));
   std::memcpy(&observations, bytes.data() + kNumClasses * sizeof(float), sizeof(observations));
-  for (float v : values) Require(std::isfinite(v) && v <= 0.0f, "LabelDistribution::FromBytes: invalid value");
+  for (float v : values)
+    Require(std::isfinite(v) && v <= 0.0f, "LabelDistribution::FromBytes: invalid value");
   return FromLogProbabilities(values, observations);
 }
 
@@ -119,10 +122,12 @@ FusionStats FuseKeyframeObservations(const Segmentation& segmentation, const Rig
                                      const FusionOptions& options) {
   options.Check();
   Require(!segmentation.empty(), "FuseKeyframeObservations: empty segmentation");
-  Require(camera.width == segmentation.input_size().width && camera.height == segmentation.input_size().height,
-          "FuseKeyframeObservations: camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-              " but segmentation of a " + std::to_string(segmentation.input_size().width) + "x" +
-              std::to_string(segmentation.input_size().height) + " image");
+  Require(
+      camera.width == segmentation.input_size().width && camera.height == segmentation.input_size().height,
+      "FuseKeyframeObservations: camera " + std::to_string(camera.width) + "x" +
+          std::to_string(camera.height) + " but segmentation of a " +
+          std::to_string(segmentation.input_size().width) + "x" +
+          std::to_string(segmentation.input_size().height) + " image");
   FusionStats stats;
   const Eigen::Matrix3d rotation = camera_from_world.rotation.toRotationMatrix();
   const Eigen::Vector3d& translation = camera_from_world.translation;
@@ -163,7 +168,8 @@ FusionStats FuseKeyframeObservations(const Segmentation& segmentation, const Rig
 
 int SampleAtPixels(const Segmentation& segmentation, std::span<const Eigen::Vector2f> pixels,
                    std::vector<float>* log_probs) {
-  return SampleAtKeypoints(segmentation, pixels, [](const Eigen::Vector2f& p) { return p; }, log_probs);
+  return SampleAtKeypoints(
+      segmentation, pixels, [](const Eigen::Vector2f& p) { return p; }, log_probs);
 }
 
 float DynamicProbability(const float* log_probs) {

@@ -3,12 +3,13 @@
 //
 // A point's posterior over the 19 classes after observations F_1..F_k (uniform prior) is
 //   p(l | F_1..k) = p(l | F_k) p(l | F_1..k-1) / Z,   Z = sum_l p(l | F_k) p(l | F_1..k-1)      (eqs. 4-5)
-// kept as log-probabilities: an observation adds its log-probabilities (19 additions, nothing else); normalization
-// is lazy: Z is never needed for the argmax and is computed only when a probability is asked for, and every few
-// observations the values are shifted so that the maximum is 0 (nothing drifts out of float precision) and floored
-// at kMinRelativeLogProbability. The label is the argmax (eq. 6) and its confidence the posterior of the argmax.
-// A keyframe observation projects the point into the keyframe (eqs. 1-2) and reads the segmentation's
-// distribution at that pixel (eq. 3): FuseKeyframeObservations does this for a batch of points.
+// kept as log-probabilities: an observation adds its log-probabilities (19 additions, nothing else);
+// normalization is lazy: Z is never needed for the argmax and is computed only when a probability is asked
+// for, and every few observations the values are shifted so that the maximum is 0 (nothing drifts out of
+// float precision) and floored at kMinRelativeLogProbability. The label is the argmax (eq. 6) and its
+// confidence the posterior of the argmax. A keyframe observation projects the point into the keyframe (eqs.
+// 1-2) and reads the segmentation's distribution at that pixel (eq. 3): FuseKeyframeObservations does this
+// for a batch of points.
 
 #include <array>
 #include <cstdint>
@@ -27,22 +28,23 @@ namespace semslam {
 
 class LabelDistribution {
  public:
-  // Posterior log-probabilities are kept relative to the most probable class, floored at kMinRelativeLogProbability
-  // (e^-60: far beyond anything a few observations can overturn) at least every kRenormalizeEvery observations.
+  // Posterior log-probabilities are kept relative to the most probable class, floored at
+  // kMinRelativeLogProbability (e^-60: far beyond anything a few observations can overturn) at least every
+  // kRenormalizeEvery observations.
   static constexpr float kMinRelativeLogProbability = -60.0f;
   static constexpr std::uint32_t kRenormalizeEvery = 8;
   static constexpr size_t kSerializedBytes = kNumClasses * sizeof(float) + sizeof(std::uint32_t);
 
   // Uniform, no observations.
   LabelDistribution() { log_p_.fill(0.0f); }
-  // From stored relative log-probabilities (e.g. a map file); normalized the same way. Throws InvalidArgument on
-  // NaN or infinite values.
+  // From stored relative log-probabilities (e.g. a map file); normalized the same way. Throws InvalidArgument
+  // on NaN or infinite values.
   static LabelDistribution FromLogProbabilities(std::span<const float, kNumClasses> log_probabilities,
                                                 std::uint32_t num_observations);
 
   // Multiplies in one observation (19 log-probabilities, e.g. from Segmentation::Sample; they need not be
-  // normalized). Each entry is floored at kMinObservationLogProbability first, so no single observation can rule
-  // a class out.
+  // normalized). Each entry is floored at kMinObservationLogProbability first, so no single observation can
+  // rule a class out.
   void Fuse(const float* observation_log_probs) {
     for (int c = 0; c < kNumClasses; ++c) {
       const float v = observation_log_probs[c];
@@ -98,10 +100,10 @@ struct PointObservation {
 };
 
 struct FusionStats {
-  int fused = 0;       // points whose distribution was updated
-  int behind = 0;      // depth <= min_depth
-  int outside = 0;     // projected outside the image (or margin)
-  int unlabeled = 0;   // inside, but the segmentation has no label there
+  int fused = 0;      // points whose distribution was updated
+  int behind = 0;     // depth <= min_depth
+  int outside = 0;    // projected outside the image (or margin)
+  int unlabeled = 0;  // inside, but the segmentation has no label there
 };
 
 struct FusionOptions {
@@ -112,18 +114,19 @@ struct FusionOptions {
 };
 
 // Fuses one keyframe's segmentation into the given points: each is moved into the camera frame (eq. 1),
-// projected (eq. 2, with the camera's distortion), its class distribution read at the pixel (eq. 3) and multiplied
-// in (eqs. 4-5). `camera` is the camera of the segmented image: its width and height must equal the segmentation's
-// input size (throws InvalidArgument otherwise). Null distributions are skipped. Not synchronized: the caller holds
-// whatever lock guards the distributions.
+// projected (eq. 2, with the camera's distortion), its class distribution read at the pixel (eq. 3) and
+// multiplied in (eqs. 4-5). `camera` is the camera of the segmented image: its width and height must equal
+// the segmentation's input size (throws InvalidArgument otherwise). Null distributions are skipped. Not
+// synchronized: the caller holds whatever lock guards the distributions.
 FusionStats FuseKeyframeObservations(const Segmentation& segmentation, const Rigid3d& camera_from_world,
                                      const PinholeCamera& camera, std::span<const PointObservation> points,
                                      const FusionOptions& options = {});
 
-// Per-keypoint sampling: 19 log-probabilities per pixel (row-major, appended to nothing: the vector is resized
-// to 19 * pixels.size()), so a point created after the keyframe was segmented can still get this keyframe's
-// observation (FuseSampledObservation). Pixels outside or without a label get an all-zero row, which means "no
-// observation" (a real observation's log-probabilities are negative). Returns the number of labeled pixels.
+// Per-keypoint sampling: 19 log-probabilities per pixel (row-major, appended to nothing: the vector is
+// resized to 19 * pixels.size()), so a point created after the keyframe was segmented can still get this
+// keyframe's observation (FuseSampledObservation). Pixels outside or without a label get an all-zero row,
+// which means "no observation" (a real observation's log-probabilities are negative). Returns the number of
+// labeled pixels.
 int SampleAtPixels(const Segmentation& segmentation, std::span<const Eigen::Vector2f> pixels,
                    std::vector<float>* log_probs);
 // The same for any keypoint type: `pixel_of(keypoint)` returns its pixel (anything with x() and y()).
@@ -140,8 +143,9 @@ int SampleAtKeypoints(const Segmentation& segmentation, const Keypoints& keypoin
   }
   return labeled;
 }
-// Probability that an observation (19 log-probabilities, e.g. a sampled row) is of a dynamic class (person, rider,
-// vehicles): for keeping features on moving things out of tracking and relocalization. 0 for a "none" row.
+// Probability that an observation (19 log-probabilities, e.g. a sampled row) is of a dynamic class (person,
+// rider, vehicles): for keeping features on moving things out of tracking and relocalization. 0 for a "none"
+// row.
 float DynamicProbability(const float* log_probs);
 
 // Whether a sampled row holds an observation (is not the all-zero "none" row).

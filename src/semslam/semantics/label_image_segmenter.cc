@@ -1,14 +1,13 @@
 #include "semslam/semantics/label_image_segmenter.h"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <sstream>
 
@@ -41,8 +40,10 @@ cv::Mat SmoothNoise(cv::Size size, double cell, std::mt19937_64& rng) {
     for (int x = 0; x < grid_w; ++x) grid.at<float>(y, x) = uniform(rng);
   }
   cv::Mat big;
-  cv::resize(grid, big, cv::Size(static_cast<int>(std::lround(grid_w * cell)), static_cast<int>(std::lround(grid_h * cell))),
-             0, 0, cv::INTER_CUBIC);
+  cv::resize(
+      grid, big,
+      cv::Size(static_cast<int>(std::lround(grid_w * cell)), static_cast<int>(std::lround(grid_h * cell))), 0,
+      0, cv::INTER_CUBIC);
   const int offset = static_cast<int>(std::lround(cell));  // skip the border cells
   return big(cv::Rect(offset, offset, size.width, size.height)).clone();
 }
@@ -68,7 +69,8 @@ cv::Mat ReadLabelImage(const std::filesystem::path& path) {
     std::map<std::uint32_t, std::uint8_t> by_color;
     for (int c = 0; c < kNumClasses; ++c) {
       const Rgb rgb = ClassColor(c);
-      by_color[(std::uint32_t{rgb.r} << 16) | (std::uint32_t{rgb.g} << 8) | rgb.b] = static_cast<std::uint8_t>(c);
+      by_color[(std::uint32_t{rgb.r} << 16) | (std::uint32_t{rgb.g} << 8) | rgb.b] =
+          static_cast<std::uint8_t>(c);
     }
     cv::Mat labels(image.size(), CV_8UC1);
     size_t unknown = 0;
@@ -88,8 +90,9 @@ cv::Mat ReadLabelImage(const std::filesystem::path& path) {
       }
     }
     if (unknown > labels.total() / 100) {
-      throw InputError(path, "a colour image that is not a Cityscapes-palette label image; expected 8-bit grey "
-                             "trainIds or labelIds");
+      throw InputError(path,
+                       "a colour image that is not a Cityscapes-palette label image; expected 8-bit grey "
+                       "trainIds or labelIds");
     }
     return labels;
   }
@@ -111,16 +114,19 @@ std::vector<cv::Mat> ReadNpyProbabilities(const std::filesystem::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string bytes = buffer.str();
-  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0) throw InputError(path, "not a NumPy .npy file");
+  if (bytes.size() < 10 || bytes.compare(0, 6, "\x93NUMPY") != 0)
+    throw InputError(path, "not a NumPy .npy file");
   const int major = static_cast<unsigned char>(bytes[6]);
   size_t header_len = 0, header_start = 0;
   if (major == 1) {
-    header_len = static_cast<unsigned char>(bytes[8]) | (static_cast<size_t>(static_cast<unsigned char>(bytes[9])) << 8);
+    header_len = static_cast<unsigned char>(bytes[8]) |
+                 (static_cast<size_t>(static_cast<unsigned char>(bytes[9])) << 8);
     header_start = 10;
   } else if (major == 2 || major == 3) {
     if (bytes.size() < 12) throw InputError(path, "truncated .npy header");
     header_len = 0;
-    for (int i = 0; i < 4; ++i) header_len |= static_cast<size_t>(static_cast<unsigned char>(bytes[8 + i])) << (8 * i);
+    for (int i = 0; i < 4; ++i)
+      header_len |= static_cast<size_t>(static_cast<unsigned char>(bytes[8 + i])) << (8 * i);
     header_start = 12;
   } else {
     throw InputError(path, "unsupported .npy version " + std::to_string(major));
@@ -143,7 +149,8 @@ std::vector<cv::Mat> ReadNpyProbabilities(const std::filesystem::path& path) {
     throw InputError(path, "Fortran-ordered .npy arrays are not supported");
   }
   const std::string shape_part = field("shape");
-  const std::string shape_text = shape_part.substr(shape_part.find('(') + 1, shape_part.find(')') - shape_part.find('(') - 1);
+  const std::string shape_text =
+      shape_part.substr(shape_part.find('(') + 1, shape_part.find(')') - shape_part.find('(') - 1);
   std::vector<long long> shape;
   std::stringstream shape_stream(shape_text);
   std::string item;
@@ -157,7 +164,8 @@ std::vector<cv::Mat> ReadNpyProbabilities(const std::filesystem::path& path) {
   const bool channels_last = is_classes(shape[2]);
   const bool channels_first = !channels_last && is_classes(shape[0]);
   if (!channels_last && !channels_first) {
-    throw InputError(path, "expected 19 class channels (or 20 with 'unlabeled' first) on the first or last axis");
+    throw InputError(path,
+                     "expected 19 class channels (or 20 with 'unlabeled' first) on the first or last axis");
   }
   if (shape[0] <= 0 || shape[1] <= 0 || shape[2] <= 0 || shape[0] * shape[1] * shape[2] > (1LL << 31)) {
     throw InputError(path, "bad array shape");
@@ -182,7 +190,8 @@ std::vector<cv::Mat> ReadNpyProbabilities(const std::filesystem::path& path) {
     cv::Mat interleaved(rows, cols, CV_MAKETYPE(CV_MAT_DEPTH(type), channels), data);
     std::vector<cv::Mat> raw;
     cv::split(interleaved, raw);
-    for (int c = 0; c < channels; ++c) raw[static_cast<size_t>(c)].convertTo(planes[static_cast<size_t>(c)], CV_32FC1, scale);
+    for (int c = 0; c < channels; ++c)
+      raw[static_cast<size_t>(c)].convertTo(planes[static_cast<size_t>(c)], CV_32FC1, scale);
   }
   for (const cv::Mat& p : planes) {
     if (!cv::checkRange(p)) throw InputError(path, "NaN or infinite probabilities");
@@ -201,8 +210,8 @@ LabelImageSegmenter::LabelImageSegmenter(std::filesystem::path dir, Options opti
 }
 
 std::string LabelImageSegmenter::Describe() const {
-  return "labels " + dir_.string() + " (" + (options_.label_ids ? "labelIds" : "trainIds") +
-         ", alpha " + std::to_string(options_.alpha) + ")";
+  return "labels " + dir_.string() + " (" + (options_.label_ids ? "labelIds" : "trainIds") + ", alpha " +
+         std::to_string(options_.alpha) + ")";
 }
 
 Segmentation LabelImageSegmenter::Segment(const cv::Mat& image, std::int64_t frame_index) {
@@ -224,17 +233,19 @@ Segmentation LabelImageSegmenter::Segment(const cv::Mat& image, std::int64_t fra
   }
   const auto png = FindFrameFile(dir_, frame_index, ".png");
   if (png.empty()) {
-    throw InputError(dir_ / (FrameName(frame_index, 6) + ".png"), "label image of frame " +
-                                                                       std::to_string(frame_index) + " not found");
+    throw InputError(dir_ / (FrameName(frame_index, 6) + ".png"),
+                     "label image of frame " + std::to_string(frame_index) + " not found");
   }
   cv::Mat labels = ReadLabelImage(png);
   if (options_.label_ids) labels = LabelIdsToTrainIds(labels);
   cv::Mat confidence;
   if (const auto conf = FindFrameFile(dir_, frame_index, ".png", "_conf"); !conf.empty()) {
     confidence = ReadLabelImage(conf);
-    if (confidence.size() != labels.size()) throw InputError(conf, "confidence image size differs from the labels'");
+    if (confidence.size() != labels.size())
+      throw InputError(conf, "confidence image size differs from the labels'");
   }
-  return Segmentation::FromLabels(labels, image.empty() ? labels.size() : image.size(), options_.alpha, confidence);
+  return Segmentation::FromLabels(labels, image.empty() ? labels.size() : image.size(), options_.alpha,
+                                  confidence);
 }
 
 void LabelNoiseOptions::Check() const {
@@ -280,11 +291,13 @@ cv::Mat AddLabelNoise(const cv::Mat& truth, const LabelNoiseOptions& options, st
   // One wrong class per blob (and, where that happens to be the true class, one fixed substitute).
   std::vector<std::array<std::uint8_t, 2>> blob_class(static_cast<size_t>(num_components));
   std::uniform_int_distribution<int> any_class(0, kNumClasses - 1), other(1, kNumClasses - 1);
-  for (auto& b : blob_class) b = {static_cast<std::uint8_t>(any_class(rng)), static_cast<std::uint8_t>(other(rng))};
+  for (auto& b : blob_class)
+    b = {static_cast<std::uint8_t>(any_class(rng)), static_cast<std::uint8_t>(other(rng))};
 
   // Salt: independent errors among the other pixels, so that the total error rate is `rate`.
   const double remaining = options.rate * num_labeled - num_blob;
-  const double salt = num_labeled > num_blob ? std::clamp(remaining / (num_labeled - num_blob), 0.0, 1.0) : 0.0;
+  const double salt =
+      num_labeled > num_blob ? std::clamp(remaining / (num_labeled - num_blob), 0.0, 1.0) : 0.0;
   const auto salt_threshold = static_cast<std::uint64_t>(salt * 4294967296.0);
   const std::uint64_t pixel_seed = rng();
   for (int y = 0; y < truth.rows; ++y) {
@@ -322,13 +335,14 @@ float TruthNoisySegmenter::Options::ResolvedAlpha() const {
 TruthNoisySegmenter::TruthNoisySegmenter(std::filesystem::path truth_dir, Options options)
     : truth_dir_(std::move(truth_dir)), options_(options) {
   options_.Check();
-  if (!std::filesystem::is_directory(truth_dir_)) throw InputError(truth_dir_, "ground-truth label folder not found");
+  if (!std::filesystem::is_directory(truth_dir_))
+    throw InputError(truth_dir_, "ground-truth label folder not found");
 }
 
 std::string TruthNoisySegmenter::Describe() const {
   return "truth-noisy " + truth_dir_.string() + " (rate " + std::to_string(options_.noise.rate) + ", blobs " +
-         std::to_string(options_.noise.blob_fraction) + ", alpha " + std::to_string(options_.ResolvedAlpha()) +
-         ", seed " + std::to_string(options_.seed) + ")";
+         std::to_string(options_.noise.blob_fraction) + ", alpha " +
+         std::to_string(options_.ResolvedAlpha()) + ", seed " + std::to_string(options_.seed) + ")";
 }
 
 cv::Mat TruthNoisySegmenter::NoisyLabels(std::int64_t frame_index) const {
@@ -345,7 +359,8 @@ cv::Mat TruthNoisySegmenter::NoisyLabels(std::int64_t frame_index) const {
 
 Segmentation TruthNoisySegmenter::Segment(const cv::Mat& image, std::int64_t frame_index) {
   cv::Mat labels = NoisyLabels(frame_index);
-  return Segmentation::FromLabels(labels, image.empty() ? labels.size() : image.size(), options_.ResolvedAlpha());
+  return Segmentation::FromLabels(labels, image.empty() ? labels.size() : image.size(),
+                                  options_.ResolvedAlpha());
 }
 
 }  // namespace semslam

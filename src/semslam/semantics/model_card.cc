@@ -112,7 +112,8 @@ void ModelCard::Check() const {
           "model card: input width and height must both be positive or both be absent");
   Require(!fixed_size || input_width > 0, "model card: a fixed input needs width and height");
   Require(resize == Resize::kStretch || fixed_size, "model card: resize: tile needs a fixed input size");
-  Require(resize == Resize::kStretch || layout != Layout::kLabels, "model card: resize: tile needs score outputs");
+  Require(resize == Resize::kStretch || layout != Layout::kLabels,
+          "model card: resize: tile needs score outputs");
   Require(size_divisor >= 1, "model card: size_divisor must be >= 1");
   Require(std::isfinite(scale) && scale > 0.0, "model card: scale must be > 0");
   for (int c = 0; c < 3; ++c) {
@@ -178,19 +179,22 @@ ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& b
     if (input["fixed"]) card.fixed_size = p.Get<bool>(input["fixed"], "input.fixed");
     if (input["resize"]) {
       const std::string resize = Lower(p.Get<std::string>(input["resize"], "input.resize"));
-      if (resize != "stretch" && resize != "tile") p.Fail(input["resize"], "input.resize", "must be stretch or tile");
+      if (resize != "stretch" && resize != "tile")
+        p.Fail(input["resize"], "input.resize", "must be stretch or tile");
       card.resize = resize == "tile" ? ModelCard::Resize::kTile : ModelCard::Resize::kStretch;
     }
     if (input["size_divisor"]) card.size_divisor = p.Get<int>(input["size_divisor"], "input.size_divisor");
     if (input["channel_order"]) {
       const std::string order = Lower(p.Get<std::string>(input["channel_order"], "input.channel_order"));
-      if (order != "rgb" && order != "bgr") p.Fail(input["channel_order"], "input.channel_order", "must be rgb or bgr");
+      if (order != "rgb" && order != "bgr")
+        p.Fail(input["channel_order"], "input.channel_order", "must be rgb or bgr");
       card.rgb = order == "rgb";
     }
     if (input["scale"]) card.scale = p.GetFinite(input["scale"], "input.scale");
     if (input["mean"]) card.mean = p.GetTriple(input["mean"], "input.mean");
     if (input["std"]) card.stddev = p.GetTriple(input["std"], "input.std");
-    if (card.input_width < 0 || card.input_height < 0) p.Fail(input, "input", "width and height must be >= 0");
+    if (card.input_width < 0 || card.input_height < 0)
+      p.Fail(input, "input", "width and height must be >= 0");
   }
 
   card.channel_to_train_id = CityscapesIdentity();
@@ -228,7 +232,8 @@ ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& b
         }
       } else if (classes.IsSequence() && classes.size() > 0) {
         card.channel_to_train_id.clear();
-        for (const YAML::Node& c : classes) card.channel_to_train_id.push_back(p.ClassOf(c, "output.classes"));
+        for (const YAML::Node& c : classes)
+          card.channel_to_train_id.push_back(p.ClassOf(c, "output.classes"));
       } else {
         p.Fail(classes, "output.classes", "must be 'cityscapes' or a non-empty list of classes");
       }

@@ -2,13 +2,13 @@
 // A model card: how to feed a segmentation network and read its output, as a small YAML file.
 //
 //   name: enet-cityscapes
-//   file: ${SEMSLAM_SHARED_DATA:-../../shared/data}/enet_cityscapes_torch/enet-model.net  # relative to the card
-//   format: torch              # torch | onnx | auto (by extension: .net/.t7 torch, .onnx onnx)
-//   input:
+//   file: ${SEMSLAM_SHARED_DATA:-../../shared/data}/enet_cityscapes_torch/enet-model.net  # relative to the
+//   card format: torch              # torch | onnx | auto (by extension: .net/.t7 torch, .onnx onnx) input:
 //     width: 1024              # network input size; with fixed: true images are stretched to exactly this
 //     height: 512
 //     fixed: true              # false: any size; width/height (optional) is then the size used
-//     resize: stretch          # fixed size: stretch the image to it, or tile: keep the aspect ratio, scale the
+//     resize: stretch          # fixed size: stretch the image to it, or tile: keep the aspect ratio, scale
+//     the
 //                              # image to the input height and run overlapping windows across it (averaged)
 //     size_divisor: 32         # not fixed and no width/height: the image size rounded to a multiple of this
 //     channel_order: rgb       # rgb | bgr (grey images are fed as three equal channels)
@@ -19,11 +19,12 @@
 //     name: ""                 # output blob name; empty = the network's last output
 //     layout: nchw             # nchw | nhwc (scores per class) | labels (class indices, N x H x W)
 //     scores: logits           # logits (softmax applied) | probabilities | log_probabilities
-//     classes: [none, road, sidewalk, ...]   # output channel -> class name, trainId, or none/unlabeled/-1/255;
+//     classes: [none, road, sidewalk, ...]   # output channel -> class name, trainId, or
+//     none/unlabeled/-1/255;
 //                                            # "cityscapes" = the 19 trainIds in order (the default)
 //
-// `${VAR}` and `${VAR:-default}` in `file` are expanded from the environment; a relative result is relative to the
-// card's folder.
+// `${VAR}` and `${VAR:-default}` in `file` are expanded from the environment; a relative result is relative
+// to the card's folder.
 
 #include <array>
 #include <cstdint>
@@ -42,7 +43,7 @@ struct ModelCard {
   std::string name;
   std::filesystem::path file;
   Format format = Format::kAuto;
-  int input_width = 0;   // 0: the image's (rounded to size_divisor)
+  int input_width = 0;  // 0: the image's (rounded to size_divisor)
   int input_height = 0;
   bool fixed_size = false;
   enum class Resize { kStretch, kTile } resize = Resize::kStretch;
@@ -69,12 +70,13 @@ ModelCard ReadModelCard(const std::filesystem::path& path);
 ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& base_dir,
                          const std::filesystem::path& source);
 
-// The ENet Cityscapes model of e-lab (Torch7): RGB, scale 1/255, no mean/std, fixed 1024x512 input (other sizes
-// give nearly all 'unlabeled' with OpenCV 4.6), 20 logit channels: 0 = unlabeled, trainId = channel - 1.
+// The ENet Cityscapes model of e-lab (Torch7): RGB, scale 1/255, no mean/std, fixed 1024x512 input (other
+// sizes give nearly all 'unlabeled' with OpenCV 4.6), 20 logit channels: 0 = unlabeled, trainId = channel
+// - 1.
 ModelCard EnetCityscapesCard(const std::filesystem::path& weights);
 
-// Expands ${VAR} and ${VAR:-default} from the environment. Throws InvalidArgument for an unset variable without a
-// default or an unterminated reference.
+// Expands ${VAR} and ${VAR:-default} from the environment. Throws InvalidArgument for an unset variable
+// without a default or an unterminated reference.
 std::string ExpandEnvironment(const std::string& text);
 
 }  // namespace semslam

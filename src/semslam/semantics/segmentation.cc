@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "semslam/core/error.h"
 
@@ -18,14 +17,16 @@ constexpr float kOthers = 1.0f / (kNumClasses - 1);
 
 float FlooredLog(float p) { return std::max(std::log(std::max(p, 0.0f)), kMinObservationLogProbability); }
 
-// A stored row of all zeros marks a pixel without a label (a real row sums to 1 in probability: at most one 0).
+// A stored row of all zeros marks a pixel without a label (a real row sums to 1 in probability: at most one
+// 0).
 inline bool IsNoLabelRow(const float* row) { return row[0] == 0.0f && row[1] == 0.0f; }
 
 }  // namespace
 
 ClassLogProbs ConfusionLogProbs(int label, float alpha) {
   Require(IsValidTrainId(label), "ConfusionLogProbs: label must be a trainId 0..18");
-  Require(alpha >= 1.0f / kNumClasses - 1e-6f && alpha <= 1.0f, "ConfusionLogProbs: alpha must lie in [1/19, 1]");
+  Require(alpha >= 1.0f / kNumClasses - 1e-6f && alpha <= 1.0f,
+          "ConfusionLogProbs: alpha must lie in [1/19, 1]");
   ClassLogProbs row;
   row.fill(FlooredLog((1.0f - alpha) * kOthers));
   row[static_cast<size_t>(label)] = FlooredLog(alpha);
@@ -136,8 +137,8 @@ cv::Mat Segmentation::LabelsAtInputSize() const {
   cv::Mat out(input_size_, CV_8UC1);
   std::vector<int> columns(static_cast<size_t>(input_size_.width));
   for (int x = 0; x < input_size_.width; ++x) {
-    columns[static_cast<size_t>(x)] = std::min(static_cast<int>((static_cast<float>(x) + 0.5f) * scale_x_),
-                                               labels.cols - 1);
+    columns[static_cast<size_t>(x)] =
+        std::min(static_cast<int>((static_cast<float>(x) + 0.5f) * scale_x_), labels.cols - 1);
   }
   for (int y = 0; y < input_size_.height; ++y) {
     const int sy = std::min(static_cast<int>((static_cast<float>(y) + 0.5f) * scale_y_), labels.rows - 1);
@@ -198,7 +199,8 @@ Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind k
               std::to_string(channel_to_train_id.size()) + " entries in the class mapping");
   const cv::Size size = planes[0].size();
   for (const cv::Mat& plane : planes) {
-    Require(plane.type() == CV_32FC1 && plane.size() == size, "SegmentationFromScores: planes must be CV_32F of one size");
+    Require(plane.type() == CV_32FC1 && plane.size() == size,
+            "SegmentationFromScores: planes must be CV_32F of one size");
   }
   // Row by row, so that everything stays in cache and exp/log run vectorized over whole rows.
   const size_t channels = planes.size();
@@ -231,8 +233,8 @@ Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind k
       for (size_t x = 0; x < w; ++x) inverse_sum[x] += row[x];
     }
     for (float& v : inverse_sum) v = (v > 0.0f && std::isfinite(v)) ? 1.0f / v : 0.0f;
-    // Class probabilities: mapped channels add; unmapped ones ("no class") are spread evenly, and where they outweigh
-    // every class the pixel has no label.
+    // Class probabilities: mapped channels add; unmapped ones ("no class") are spread evenly, and where they
+    // outweigh every class the pixel has no label.
     std::fill(classes.begin(), classes.end(), 0.0f);
     std::fill(spread.begin(), spread.end(), 0.0f);
     for (size_t c = 0; c < channels; ++c) {
@@ -265,7 +267,8 @@ Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind k
         std::fill(dst, dst + kNumClasses, 0.0f);
         continue;
       }
-      for (size_t k = 0; k < static_cast<size_t>(kNumClasses); ++k) dst[k] = std::min(classes[k * w + x], 0.0f);
+      for (size_t k = 0; k < static_cast<size_t>(kNumClasses); ++k)
+        dst[k] = std::min(classes[k * w + x], 0.0f);
     }
   }
   return Segmentation::FromLogProbabilities(std::move(out), input_size);

@@ -1,7 +1,7 @@
 #pragma once
 // The result of segmenting one image: a distribution over the 19 classes that can be sampled at any
-// (sub-)pixel of the input image. Stored compactly at the resolution the segmenter produced it (for a CNN, its
-// output resolution; for label images, theirs) together with the mapping back to input pixels, either as
+// (sub-)pixel of the input image. Stored compactly at the resolution the segmenter produced it (for a CNN,
+// its output resolution; for label images, theirs) together with the mapping back to input pixels, either as
 //  - per-pixel log-probabilities (CV_32FC(19), pixel-major: 19 contiguous floats per pixel), or
 //  - per-pixel labels (CV_8U trainIds, kNoLabel = none), optionally with a per-pixel confidence (CV_8U,
 //    p = value / 255), turned into distributions by the confusion model: the given class gets alpha (or p),
@@ -12,10 +12,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <opencv2/core/mat.hpp>
 #include <span>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "semslam/geometry/eigen_types.h"
 #include "semslam/semantics/class_table.h"
@@ -30,8 +29,8 @@ using ClassLogProbs = std::array<float, kNumClasses>;
 inline constexpr float kMinObservationProbability = 1e-4f;
 inline constexpr float kMinObservationLogProbability = -9.210340372f;  // log(1e-4)
 
-// The confusion model for a label-only observation: log(alpha) for `label`, log((1 - alpha) / 18) for the others,
-// both floored at kMinObservationLogProbability. alpha must lie in [1/19, 1].
+// The confusion model for a label-only observation: log(alpha) for `label`, log((1 - alpha) / 18) for the
+// others, both floored at kMinObservationLogProbability. alpha must lie in [1/19, 1].
 ClassLogProbs ConfusionLogProbs(int label, float alpha);
 
 // What per-class score planes hold (see SegmentationFromScores).
@@ -43,14 +42,14 @@ class Segmentation {
 
   Segmentation() = default;
 
-  // `log_probabilities`: CV_32FC(19), normalized per pixel; a pixel whose 19 values are all 0 has no label. It
-  // covers an input image of `input_size` (stretched over it when the sizes differ). Values are floored at
-  // kMinObservationLogProbability (in place: the buffer is taken over). Throws InvalidArgument on a wrong type or
-  // empty sizes.
+  // `log_probabilities`: CV_32FC(19), normalized per pixel; a pixel whose 19 values are all 0 has no label.
+  // It covers an input image of `input_size` (stretched over it when the sizes differ). Values are floored at
+  // kMinObservationLogProbability (in place: the buffer is taken over). Throws InvalidArgument on a wrong
+  // type or empty sizes.
   static Segmentation FromLogProbabilities(cv::Mat log_probabilities, cv::Size input_size);
-  // `labels`: CV_8U trainIds (kNoLabel and any value >= 19 mean "no observation"). `confidence`: empty, or CV_8U
-  // of the same size with the probability of the given label times 255 (replaces alpha per pixel; clamped to
-  // [1/19, 1]). Throws InvalidArgument on wrong types or sizes, or alpha outside [1/19, 1].
+  // `labels`: CV_8U trainIds (kNoLabel and any value >= 19 mean "no observation"). `confidence`: empty, or
+  // CV_8U of the same size with the probability of the given label times 255 (replaces alpha per pixel;
+  // clamped to [1/19, 1]). Throws InvalidArgument on wrong types or sizes, or alpha outside [1/19, 1].
   static Segmentation FromLabels(cv::Mat labels, cv::Size input_size, float alpha, cv::Mat confidence = {});
 
   Storage storage() const { return storage_; }
@@ -63,8 +62,8 @@ class Segmentation {
   float alpha() const { return alpha_; }
 
   // Writes the 19 log-probabilities observed at input pixel (x, y) (pixel centres at integers) into
-  // `log_probs` and returns true; returns false, leaving `log_probs` untouched, when the pixel lies outside the
-  // input image or has no label. Cheap (a few ns): no allocation, no logarithm.
+  // `log_probs` and returns true; returns false, leaving `log_probs` untouched, when the pixel lies outside
+  // the input image or has no label. Cheap (a few ns): no allocation, no logarithm.
   bool Sample(float x, float y, float* log_probs) const {
     const int index = StorageIndex(x, y);
     if (index < 0) return false;
@@ -111,17 +110,18 @@ class Segmentation {
   float scale_x_ = 1.0f, scale_y_ = 1.0f;  // stored cells per input pixel
   float max_x_ = 0.0f, max_y_ = 0.0f;      // input size - 0.5
   float alpha_ = 1.0f;
-  // Label storage: the confusion-model rows for each label (alpha), and per confidence byte the log of the given
-  // class's and of each other class's probability.
+  // Label storage: the confusion-model rows for each label (alpha), and per confidence byte the log of the
+  // given class's and of each other class's probability.
   std::vector<ClassLogProbs> label_rows_;
   std::vector<std::array<float, 2>> confidence_logs_;
 };
 
 // Builds a log-probability segmentation from per-channel score planes (each CV_32F, all of one size) of a
-// network or a file. `channel_to_train_id[c]` is the trainId channel c stands for; several channels may map to
-// one class (their probabilities add), and channels mapped to kNoLabel ("unlabeled") spread their probability
-// evenly over the 19 classes: they say "no idea"; where they outweigh every class (ENet's 'unlabeled' on the ego
-// vehicle, say) the pixel has no label at all. Logits go through a softmax; probabilities are renormalized.
+// network or a file. `channel_to_train_id[c]` is the trainId channel c stands for; several channels may map
+// to one class (their probabilities add), and channels mapped to kNoLabel ("unlabeled") spread their
+// probability evenly over the 19 classes: they say "no idea"; where they outweigh every class (ENet's
+// 'unlabeled' on the ego vehicle, say) the pixel has no label at all. Logits go through a softmax;
+// probabilities are renormalized.
 Segmentation SegmentationFromScores(std::span<const cv::Mat> planes, ScoreKind kind,
                                     std::span<const std::uint8_t> channel_to_train_id, cv::Size input_size);
 

@@ -12,7 +12,8 @@ void SegmentationWorkerOptions::Check() const {
   Require(max_pending >= 1, "SegmentationWorker: max_pending must be >= 1");
 }
 
-SegmentationWorker::SegmentationWorker(std::shared_ptr<Segmenter> segmenter, Callback callback, Options options)
+SegmentationWorker::SegmentationWorker(std::shared_ptr<Segmenter> segmenter, Callback callback,
+                                       Options options)
     : segmenter_(std::move(segmenter)), callback_(std::move(callback)), options_(options) {
   options_.Check();
   Require(segmenter_ != nullptr, "SegmentationWorker: no segmenter");

@@ -1,9 +1,9 @@
 #pragma once
 // Asynchronous segmentation of keyframes on a worker thread of its own, so that tracking never waits for the
-// network. Submit() only stores the request; when the worker falls behind, it takes the newest pending keyframe
-// and skips the older ones (counted and listed). Each result is delivered, with its keyframe id, to a callback
-// called on the worker thread; a result may arrive long after its keyframe was made (the caller fuses it then: see
-// label_fusion.h for points created in the meantime).
+// network. Submit() only stores the request; when the worker falls behind, it takes the newest pending
+// keyframe and skips the older ones (counted and listed). Each result is delivered, with its keyframe id, to
+// a callback called on the worker thread; a result may arrive long after its keyframe was made (the caller
+// fuses it then: see label_fusion.h for points created in the meantime).
 
 #include <condition_variable>
 #include <cstdint>
@@ -11,11 +11,10 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <thread>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "semslam/core/timing.h"
 #include "semslam/semantics/segmentation.h"
@@ -49,22 +48,22 @@ class SegmentationWorker {
   using Callback = std::function<void(SegmentationResult&&)>;
   using Options = SegmentationWorkerOptions;
 
-  // Starts the thread. `callback` is called on the worker thread, one result at a time; exceptions it throws are
-  // logged and counted as failures.
+  // Starts the thread. `callback` is called on the worker thread, one result at a time; exceptions it throws
+  // are logged and counted as failures.
   SegmentationWorker(std::shared_ptr<Segmenter> segmenter, Callback callback, Options options = {});
   // Stops (pending requests are skipped) and joins. Must not run inside the callback.
   ~SegmentationWorker();
   SegmentationWorker(const SegmentationWorker&) = delete;
   SegmentationWorker& operator=(const SegmentationWorker&) = delete;
 
-  // Queues a keyframe; never blocks on the segmentation (only on a short mutex). `image` is shared, not copied:
-  // the caller must not write into it afterwards. `frame_index` is for segmenters that read per-frame files.
-  // Ignored after Stop().
+  // Queues a keyframe; never blocks on the segmentation (only on a short mutex). `image` is shared, not
+  // copied: the caller must not write into it afterwards. `frame_index` is for segmenters that read per-frame
+  // files. Ignored after Stop().
   void Submit(std::uint64_t keyframe_id, cv::Mat image, std::int64_t frame_index = -1);
   // Blocks until nothing is pending or running (for the end of a run, and tests).
   void WaitUntilIdle();
-  // Stops the thread after the segmentation in progress; pending requests are skipped unless `drain`, in which
-  // case they are segmented first. Idempotent.
+  // Stops the thread after the segmentation in progress; pending requests are skipped unless `drain`, in
+  // which case they are segmented first. Idempotent.
   void Stop(bool drain = false);
 
   SegmentationWorkerStats stats() const;

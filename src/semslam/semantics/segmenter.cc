@@ -68,7 +68,8 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     for (const auto& [key, value] : p.settings) {
       bool ok = false;
       for (std::string_view k : keys) ok = ok || key == k;
-      Require(ok, "segmenter spec '" + std::string(spec) + "': setting '" + key + "' does not apply to " + p.kind);
+      Require(ok, "segmenter spec '" + std::string(spec) + "': setting '" + key + "' does not apply to " +
+                      p.kind);
     }
   };
   const auto need_argument = [&](const char* what) {
@@ -87,7 +88,7 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     const std::filesystem::path argument(p.argument);
     const std::string ext = argument.extension().string();
     ModelCard card = (p.kind == "enet" && ext != ".yaml" && ext != ".yml") ? EnetCityscapesCard(argument)
-                                                                             : ReadModelCard(argument);
+                                                                           : ReadModelCard(argument);
     if (const auto* r = setting("resize")) {
       Require(*r == "stretch" || *r == "tile", "segmenter spec: resize must be 'stretch' or 'tile'");
       card.resize = *r == "tile" ? ModelCard::Resize::kTile : ModelCard::Resize::kStretch;

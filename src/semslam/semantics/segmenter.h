@@ -1,19 +1,21 @@
 #pragma once
 // Segmenters turn an image into a Segmentation. Backends:
-//   - DnnSegmenter (dnn_segmenter.h): a CNN through OpenCV's dnn module (Torch7 .net such as ENet, ONNX exports),
+//   - DnnSegmenter (dnn_segmenter.h): a CNN through OpenCV's dnn module (Torch7 .net such as ENet, ONNX
+//   exports),
 //     described by a model card (model_card.h);
-//   - LabelImageSegmenter (label_image_segmenter.h): label or probability images on disk from any external network;
-//   - TruthNoisySegmenter (label_image_segmenter.h): ground-truth labels through a noise model, for experiments.
+//   - LabelImageSegmenter (label_image_segmenter.h): label or probability images on disk from any external
+//   network;
+//   - TruthNoisySegmenter (label_image_segmenter.h): ground-truth labels through a noise model, for
+//   experiments.
 // MakeSegmenter builds one from a spec string (`semslam run --segmenter SPEC`).
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
-
-#include <opencv2/core/mat.hpp>
 
 #include "semslam/semantics/segmentation.h"
 
@@ -29,9 +31,9 @@ class Segmenter {
   virtual bool NeedsImage() const { return true; }
   // Whether Segment() needs the frame index.
   virtual bool NeedsFrameIndex() const { return false; }
-  // Segments `image` (8-bit grey, BGR or BGRA). `frame_index` names the frame for segmenters that read per-frame
-  // files. The result's input size is the image's (or, with no image, the file's). Not thread-safe: one call at
-  // a time. Throws InputError for bad or missing input files, InvalidArgument for a bad call.
+  // Segments `image` (8-bit grey, BGR or BGRA). `frame_index` names the frame for segmenters that read
+  // per-frame files. The result's input size is the image's (or, with no image, the file's). Not thread-safe:
+  // one call at a time. Throws InputError for bad or missing input files, InvalidArgument for a bad call.
   virtual Segmentation Segment(const cv::Mat& image, std::int64_t frame_index = -1) = 0;
 };
 
@@ -49,11 +51,11 @@ struct SegmenterContext {
 //   onnx:CARD.yaml           -> any OpenCV dnn model described by a model card (also: card:CARD.yaml)
 //   labels:DIR               -> per-frame label images DIR/%06d.png (trainIds) or probabilities DIR/%06d.npy
 //   truth-noisy:RATE         -> context.truth_label_dir through the noise model (RATE in [0, 0.9])
-// followed by optional ",key=value" settings: alpha=A (confusion model, labels and truth-noisy; default 0.8 for
-// labels, 1 - RATE for truth-noisy), ids=train|label (labels: trainIds or Cityscapes labelIds), seed=N,
-// blobs=F (truth-noisy: share of the errors in blobs, default 0.5), blob_size=PX, threads=N (dnn: OpenCV threads,
-// process-wide), resize=stretch|tile (dnn with a fixed input size, see model_card.h).
-// Throws InvalidArgument naming the problem for a bad spec, InputError for a missing or bad file.
+// followed by optional ",key=value" settings: alpha=A (confusion model, labels and truth-noisy; default 0.8
+// for labels, 1 - RATE for truth-noisy), ids=train|label (labels: trainIds or Cityscapes labelIds), seed=N,
+// blobs=F (truth-noisy: share of the errors in blobs, default 0.5), blob_size=PX, threads=N (dnn: OpenCV
+// threads, process-wide), resize=stretch|tile (dnn with a fixed input size, see model_card.h). Throws
+// InvalidArgument naming the problem for a bad spec, InputError for a missing or bad file.
 std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterContext& context = {});
 
 }  // namespace semslam

@@ -1,13 +1,12 @@
 #include "semslam/semantics/semantic_outputs.h"
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 
@@ -32,9 +31,9 @@ struct PlyProperty {
 
 size_t PlyTypeSize(const std::string& type) {
   static const std::map<std::string, size_t> sizes = {
-      {"char", 1},   {"uchar", 1},  {"int8", 1},  {"uint8", 1},   {"short", 2},   {"ushort", 2},
-      {"int16", 2},  {"uint16", 2}, {"int", 4},   {"uint", 4},    {"int32", 4},   {"uint32", 4},
-      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
+      {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+      {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
   const auto it = sizes.find(type);
   return it == sizes.end() ? 0 : it->second;
 }
@@ -56,12 +55,18 @@ double ReadBinaryValue(const char* p, const std::string& type) {
 }
 
 void Assign(SemanticPoint& point, const std::string& name, double value) {
-  if (name == "x") point.position.x() = value;
-  else if (name == "y") point.position.y() = value;
-  else if (name == "z") point.position.z() = value;
-  else if (name == "label") point.label = static_cast<int>(value);
-  else if (name == "confidence") point.confidence = static_cast<float>(value);
-  else if (name == "observations") point.observations = static_cast<int>(value);
+  if (name == "x")
+    point.position.x() = value;
+  else if (name == "y")
+    point.position.y() = value;
+  else if (name == "z")
+    point.position.z() = value;
+  else if (name == "label")
+    point.label = static_cast<int>(value);
+  else if (name == "confidence")
+    point.confidence = static_cast<float>(value);
+  else if (name == "observations")
+    point.observations = static_cast<int>(value);
 }
 
 }  // namespace
@@ -75,7 +80,8 @@ SemanticPoint ToSemanticPoint(const Eigen::Vector3d& position, const LabelDistri
   return p;
 }
 
-void WriteSemanticPly(const std::filesystem::path& path, std::span<const SemanticPoint> points, PlyFormat format) {
+void WriteSemanticPly(const std::filesystem::path& path, std::span<const SemanticPoint> points,
+                      PlyFormat format) {
   std::string out;
   out.reserve(300 + points.size() * (format == PlyFormat::kBinary ? 24 : 64));
   out += "ply\n";
@@ -248,7 +254,8 @@ LabelAccuracy EvaluatePointLabels(std::span<const SemanticPoint> points, const G
 }
 
 void SegmentationScore::Add(const cv::Mat& predicted, const cv::Mat& truth) {
-  Require(predicted.type() == CV_8UC1 && truth.type() == CV_8UC1, "SegmentationScore: expected CV_8U trainIds");
+  Require(predicted.type() == CV_8UC1 && truth.type() == CV_8UC1,
+          "SegmentationScore: expected CV_8U trainIds");
   Require(predicted.size() == truth.size(), "SegmentationScore: prediction and truth differ in size");
   for (int y = 0; y < truth.rows; ++y) {
     const std::uint8_t* t = truth.ptr<std::uint8_t>(y);
