@@ -9,7 +9,9 @@
 #include "commands.h"
 #include "semslam/core/error.h"
 #include "semslam/core/progress.h"
+#include "semslam/core/text_reader.h"
 #include "semslam/core/timing.h"
+#include "semslam/place/retrieval_evaluation.h"
 #include "semslam/place/vocabulary.h"
 #include "semslam/place/vocabulary_builder.h"
 
@@ -64,6 +66,61 @@ void Train(const TrainArgs& args) {
   std::fprintf(stderr, "vocab train: done in %.1f s\n", watch.ElapsedSeconds());
 }
 
+struct EvalArgs {
+  std::string vocabulary;
+  std::string sequence;
+  std::string poses;
+  int features = 2000;
+  size_t max_frames = 0;
+  RetrievalOptions retrieval;
+};
+
+// KITTI poses: 12 numbers per line, the 3x4 camera-to-world matrix row by row.
+void ReadKittiCentres(const std::filesystem::path& path, std::vector<Eigen::Vector3d>& centres,
+                      std::vector<Eigen::Vector3d>& directions) {
+  TextReader reader(path);
+  while (auto line = reader.NextLine()) {
+    const auto tokens = SplitTokens(*line);
+    if (tokens.empty()) continue;
+    const auto values = ParseVector<12>(tokens, reader.Where(), "pose");
+    centres.emplace_back(values[3], values[7], values[11]);
+    directions.emplace_back(values[2], values[6], values[10]);
+  }
+}
+
+void Eval(const EvalArgs& args) {
+  const Vocabulary vocabulary = Vocabulary::Load(args.vocabulary);
+  const std::filesystem::path sequence(args.sequence);
+  std::filesystem::path poses = args.poses;
+  if (poses.empty()) {
+    // KITTI layout: <root>/sequences/<name>/ with <root>/poses/<name>.txt.
+    poses = sequence.parent_path().parent_path() / "poses" / (sequence.filename().string() + ".txt");
+    if (sequence.filename().empty()) {
+      poses = sequence.parent_path().parent_path().parent_path() / "poses" /
+              (sequence.parent_path().filename().string() + ".txt");
+    }
+  }
+  std::vector<Eigen::Vector3d> centres, directions;
+  ReadKittiCentres(poses, centres, directions);
+  auto images = ListTrainingImages({sequence}, 0);
+  if (images.size() > centres.size()) images.resize(centres.size());
+  if (args.max_frames > 0 && images.size() > args.max_frames) images.resize(args.max_frames);
+  centres.resize(images.size());
+  directions.resize(images.size());
+  OrbOptions orb;
+  orb.num_features = args.features;
+  orb.pattern = vocabulary.descriptor_pattern();
+  ProgressReporter progress("extracting features", images.size());
+  const auto descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+  progress.Finish();
+  const RetrievalResult r = EvaluateRetrieval(vocabulary, descriptors, centres, directions, args.retrieval);
+  std::printf(
+      "{\"frames\": %zu, \"queries\": %d, \"revisits\": %d, \"top1\": %d, \"top5\": %d, \"top1_rate\": %.4f, "
+      "\"top5_rate\": %.4f, \"median_true_score\": %.4f, \"median_other_score\": %.4f, \"false_top1\": %d}\n",
+      images.size(), r.queries, r.revisits, r.top1, r.top5, r.Top1Rate(), r.Top5Rate(), r.median_true_score,
+      r.median_other_score, r.false_top1);
+}
+
 }  // namespace
 
 void AddVocabCommand(CLI::App& app) {
@@ -111,6 +168,25 @@ void AddVocabCommand(CLI::App& app) {
   auto* info = cmd->add_subcommand("info", "Print a vocabulary's parameters");
   info->add_option("file", *file, "Vocabulary file (semslam or DBoW2 text)")->required();
   info->callback([file] { PrintSummary(Vocabulary::Load(*file), *file); });
+
+  auto eval = std::make_shared<EvalArgs>();
+  auto* evaluate = cmd->add_subcommand(
+      "eval", "Place-recognition quality on a sequence with poses: does the best database frame show the same place?");
+  evaluate->add_option("--vocabulary", eval->vocabulary, "Vocabulary file")->required();
+  evaluate->add_option("--sequence", eval->sequence, "KITTI-layout sequence folder (with image_0/)")->required();
+  evaluate->add_option("--poses", eval->poses, "KITTI poses file (default: <root>/poses/<name>.txt)");
+  evaluate->add_option("--features", eval->features, "ORB features per frame")->capture_default_str();
+  evaluate->add_option("--max-frames", eval->max_frames, "Use only the first N frames (0: all)")->capture_default_str();
+  evaluate->add_option("--every", eval->retrieval.database_every, "Every n-th frame enters the database")
+      ->capture_default_str();
+  evaluate->add_option("--exclude-recent", eval->retrieval.exclude_recent,
+                       "Database frames this recent are not candidates")
+      ->capture_default_str();
+  evaluate->add_option("--distance", eval->retrieval.same_place_distance, "Same place: centres within (m)")
+      ->capture_default_str();
+  evaluate->add_option("--angle", eval->retrieval.same_place_angle_deg, "Same place: directions within (deg)")
+      ->capture_default_str();
+  evaluate->callback([eval] { Eval(*eval); });
 }
 
 }  // namespace semslam::cli

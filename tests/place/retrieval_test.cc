@@ -10,6 +10,7 @@
 #include "semslam/features/orb_pattern.h"
 #include "semslam/place/bow_matching.h"
 #include "semslam/place/keyframe_database.h"
+#include "semslam/place/retrieval_evaluation.h"
 #include "semslam/place/vocabulary.h"
 #include "support/test_support.h"
 
@@ -86,6 +87,39 @@ TEST(Retrieval, KittiFramesFindTheirNeighboursWithAVocabularyNeverTrainedOnKitti
     right += !results.empty() && results[0].id == static_cast<std::uint64_t>(i - 3);
   }
   EXPECT_GE(right, total - 1) << right << " of " << total;
+}
+
+TEST(Retrieval, EvaluationCountsRevisitsAndRightAnswers) {
+  // 30 places along a straight street, then the first 10 again (perturbed views, same poses).
+  const Vocabulary& vocabulary = SyntheticVocabulary();
+  const OrbExtractor extractor;
+  std::vector<std::vector<Descriptor>> descriptors;
+  std::vector<Eigen::Vector3d> positions, directions;
+  std::vector<cv::Mat> places;
+  for (int i = 0; i < 30; ++i) {
+    places.push_back(MakeSyntheticTrainingImage(7000 + i));
+    descriptors.push_back(extractor.Extract(places.back()).descriptors);
+    positions.emplace_back(0, 0, 10.0 * i);
+    directions.emplace_back(0, 0, 1);
+  }
+  for (int i = 0; i < 10; ++i) {
+    descriptors.push_back(extractor.Extract(Perturb(places[static_cast<size_t>(i)], i)).descriptors);
+    positions.emplace_back(0.5, 0, 10.0 * i);
+    directions.emplace_back(0, 0, 1);
+  }
+  RetrievalOptions options;
+  options.database_every = 1;
+  options.exclude_recent = 15;
+  const RetrievalResult r = EvaluateRetrieval(vocabulary, descriptors, positions, directions, options);
+  EXPECT_EQ(r.queries, 40 - 15);
+  EXPECT_EQ(r.revisits, 10);
+  EXPECT_EQ(r.top1, 10);
+  EXPECT_EQ(r.top5, 10);
+  EXPECT_GT(r.median_true_score, r.median_other_score);
+  EXPECT_DOUBLE_EQ(r.Top1Rate(), 1.0);
+  // Looking the other way is not the same place.
+  for (int i = 30; i < 40; ++i) directions[static_cast<size_t>(i)] = {0, 0, -1};
+  EXPECT_EQ(EvaluateRetrieval(vocabulary, descriptors, positions, directions, options).revisits, 0);
 }
 
 TEST(BowMatching, MatchesAShiftedImageThroughTheDirectIndex) {
