@@ -51,7 +51,9 @@ const std::vector<cv::Mat>& Frames() {
 class FrameTimer {
  public:
   void Start() { start_ = Clock::now(); }
-  void Stop() { samples_.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start_).count()); }
+  void Stop() {
+    samples_.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start_).count());
+  }
   void Report(benchmark::State& state) {
     if (samples_.empty()) return;
     std::sort(samples_.begin(), samples_.end());
@@ -107,7 +109,8 @@ BENCHMARK(BM_ExtractSemslam)
 
 void BM_ExtractOpenCvOrb(benchmark::State& state) {
   if (!NeedFrames(state)) return;
-  auto orb = cv::ORB::create(static_cast<int>(state.range(0)), 1.2f, 8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
+  auto orb =
+      cv::ORB::create(static_cast<int>(state.range(0)), 1.2f, 8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31, 20);
   FrameTimer timer;
   size_t i = 0, features = 0;
   for (auto _ : state) {
@@ -122,7 +125,13 @@ void BM_ExtractOpenCvOrb(benchmark::State& state) {
   timer.Report(state);
   state.counters["features"] = static_cast<double>(features) / static_cast<double>(state.iterations());
 }
-BENCHMARK(BM_ExtractOpenCvOrb)->ArgNames({"features"})->Arg(2000)->Arg(1000)->Iterations(320)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ExtractOpenCvOrb)
+    ->ArgNames({"features"})
+    ->Arg(2000)
+    ->Arg(1000)
+    ->Iterations(320)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Our keypoints described by cv::ORB (the DBoW2-compatible option).
 void BM_ExtractSemslamOpenCvPattern(benchmark::State& state) {
@@ -156,7 +165,8 @@ void BM_MatchStereo(benchmark::State& state) {
   for (size_t k = 0; k < Frames().size(); k += 16) {
     const cv::Mat& left = Frames()[k];
     cv::Mat right;
-    cv::warpAffine(left, right, cv::Matx23d(1, 0, -20.3, 0, 1, 0), left.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
+    cv::warpAffine(left, right, cv::Matx23d(1, 0, -20.3, 0, 1, 0), left.size(), cv::INTER_LINEAR,
+                   cv::BORDER_REFLECT_101);
     Pair p;
     p.left = extractor.Extract(left, {}, &p.left_pyramid);
     p.right = extractor.Extract(right, {}, &p.right_pyramid);
@@ -192,7 +202,8 @@ const Vocabulary& BenchVocabulary() {
     orb.num_features = 1000;
     const OrbExtractor extractor(orb);
     std::vector<std::vector<Descriptor>> images;
-    for (int i = 0; i < 100; ++i) images.push_back(extractor.Extract(MakeSyntheticTrainingImage(1000 + i)).descriptors);
+    for (int i = 0; i < 100; ++i)
+      images.push_back(extractor.Extract(MakeSyntheticTrainingImage(1000 + i)).descriptors);
     VocabularyTrainingOptions options;
     return Vocabulary::Train(images, options);
   }();
@@ -225,10 +236,12 @@ void BM_DatabaseQuery(benchmark::State& state) {
   const Vocabulary& vocabulary = BenchVocabulary();
   const OrbExtractor extractor;
   std::vector<BowVector> bows;
-  for (const cv::Mat& frame : Frames()) bows.push_back(vocabulary.Transform(extractor.Extract(frame).descriptors));
+  for (const cv::Mat& frame : Frames())
+    bows.push_back(vocabulary.Transform(extractor.Extract(frame).descriptors));
   KeyFrameDatabase database(vocabulary.size());
   const int keyframes = static_cast<int>(state.range(0));
-  for (int k = 0; k < keyframes; ++k) database.Add(static_cast<std::uint64_t>(k), bows[static_cast<size_t>(k) % bows.size()]);
+  for (int k = 0; k < keyframes; ++k)
+    database.Add(static_cast<std::uint64_t>(k), bows[static_cast<size_t>(k) % bows.size()]);
   FrameTimer timer;
   size_t i = 0;
   for (auto _ : state) {
@@ -239,7 +252,12 @@ void BM_DatabaseQuery(benchmark::State& state) {
   }
   timer.Report(state);
 }
-BENCHMARK(BM_DatabaseQuery)->ArgNames({"keyframes"})->Arg(1000)->Iterations(200)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DatabaseQuery)
+    ->ArgNames({"keyframes"})
+    ->Arg(1000)
+    ->Iterations(200)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace semslam

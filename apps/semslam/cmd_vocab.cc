@@ -1,6 +1,6 @@
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -21,11 +21,12 @@ namespace {
 void PrintSummary(const Vocabulary& vocabulary, const std::filesystem::path& path) {
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
-  std::fprintf(stderr, "vocabulary %s: k = %d, L = %d, %zu words, %zu nodes, %s descriptors, %.2f MB\n",
-               path.string().c_str(), vocabulary.branching(), vocabulary.depth(), vocabulary.size(),
-               vocabulary.num_nodes(),
-               vocabulary.descriptor_pattern() == OrbDescriptorPattern::kOpenCv ? "OpenCV-pattern ORB" : "semslam ORB",
-               ec ? 0.0 : static_cast<double>(bytes) / 1e6);
+  std::fprintf(
+      stderr, "vocabulary %s: k = %d, L = %d, %zu words, %zu nodes, %s descriptors, %.2f MB\n",
+      path.string().c_str(), vocabulary.branching(), vocabulary.depth(), vocabulary.size(),
+      vocabulary.num_nodes(),
+      vocabulary.descriptor_pattern() == OrbDescriptorPattern::kOpenCv ? "OpenCV-pattern ORB" : "semslam ORB",
+      ec ? 0.0 : static_cast<double>(bytes) / 1e6);
 }
 
 struct TrainArgs {
@@ -111,7 +112,8 @@ void Eval(const EvalArgs& args) {
   orb.num_features = args.features;
   orb.pattern = vocabulary.descriptor_pattern();
   ProgressReporter progress("extracting features", images.size());
-  const auto descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+  const auto descriptors =
+      ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
   progress.Finish();
   const RetrievalResult r = EvaluateRetrieval(vocabulary, descriptors, centres, directions, args.retrieval);
   std::printf(
@@ -129,8 +131,9 @@ void AddVocabCommand(CLI::App& app) {
 
   auto args = std::make_shared<TrainArgs>();
   auto* train = cmd->add_subcommand("train", "Train a vocabulary on the ORB features of image folders");
-  train->add_option("--images", args->image_dirs,
-                    "Image folders (or KITTI-layout datasets: DIR/image_0, DIR/sequences/*/image_0)")
+  train
+      ->add_option("--images", args->image_dirs,
+                   "Image folders (or KITTI-layout datasets: DIR/image_0, DIR/sequences/*/image_0)")
       ->required()
       ->expected(1, -1);
   train->add_option("--out", args->out, "Vocabulary file to write")->required();
@@ -140,18 +143,22 @@ void AddVocabCommand(CLI::App& app) {
       ->check(CLI::Range(1, 16));
   train->add_option("--max-images", args->max_images, "Use at most this many images, evenly spread (0: all)")
       ->capture_default_str();
-  train->add_option("--features", args->features, "ORB features per image")->capture_default_str()->check(CLI::Range(10, 100000));
+  train->add_option("--features", args->features, "ORB features per image")
+      ->capture_default_str()
+      ->check(CLI::Range(10, 100000));
   train->add_option("--iterations", args->iterations, "k-majority iterations per node")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   train->add_option("--seed", args->seed, "Seed of the k-means++ seeding")->capture_default_str();
-  train->add_flag("--opencv-pattern", args->opencv_pattern,
-                  "Describe features with OpenCV's ORB pattern (as DBoW2 vocabularies such as ORBvoc.txt do)");
+  train->add_flag(
+      "--opencv-pattern", args->opencv_pattern,
+      "Describe features with OpenCV's ORB pattern (as DBoW2 vocabularies such as ORBvoc.txt do)");
   train->callback([args] { Train(*args); });
 
   auto dbow2 = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
-  auto* convert = cmd->add_subcommand("convert", "Convert a DBoW2 text vocabulary (ORBvoc.txt) to semslam's format");
+  auto* convert =
+      cmd->add_subcommand("convert", "Convert a DBoW2 text vocabulary (ORBvoc.txt) to semslam's format");
   convert->add_option("--dbow2", *dbow2, "DBoW2 text vocabulary")->required();
   convert->add_option("--out", *out, "Vocabulary file to write")->required();
   convert->callback([dbow2, out] {
@@ -170,17 +177,21 @@ void AddVocabCommand(CLI::App& app) {
   info->callback([file] { PrintSummary(Vocabulary::Load(*file), *file); });
 
   auto eval = std::make_shared<EvalArgs>();
-  auto* evaluate = cmd->add_subcommand(
-      "eval", "Place-recognition quality on a sequence with poses: does the best database frame show the same place?");
+  auto* evaluate = cmd->add_subcommand("eval",
+                                       "Place-recognition quality on a sequence with poses: does the best "
+                                       "database frame show the same place?");
   evaluate->add_option("--vocabulary", eval->vocabulary, "Vocabulary file")->required();
-  evaluate->add_option("--sequence", eval->sequence, "KITTI-layout sequence folder (with image_0/)")->required();
+  evaluate->add_option("--sequence", eval->sequence, "KITTI-layout sequence folder (with image_0/)")
+      ->required();
   evaluate->add_option("--poses", eval->poses, "KITTI poses file (default: <root>/poses/<name>.txt)");
   evaluate->add_option("--features", eval->features, "ORB features per frame")->capture_default_str();
-  evaluate->add_option("--max-frames", eval->max_frames, "Use only the first N frames (0: all)")->capture_default_str();
+  evaluate->add_option("--max-frames", eval->max_frames, "Use only the first N frames (0: all)")
+      ->capture_default_str();
   evaluate->add_option("--every", eval->retrieval.database_every, "Every n-th frame enters the database")
       ->capture_default_str();
-  evaluate->add_option("--exclude-recent", eval->retrieval.exclude_recent,
-                       "Database frames this recent are not candidates")
+  evaluate
+      ->add_option("--exclude-recent", eval->retrieval.exclude_recent,
+                   "Database frames this recent are not candidates")
       ->capture_default_str();
   evaluate->add_option("--distance", eval->retrieval.same_place_distance, "Same place: centres within (m)")
       ->capture_default_str();

@@ -55,7 +55,8 @@ TEST(FeatureGrid, AreaQueriesEqualBruteForce) {
     int lo = level(rng), hi = level(rng);
     if (hi >= 0 && lo > hi) std::swap(lo, hi);
     const auto expected = BruteForce(f, x, y, r, lo, hi);
-    EXPECT_EQ(grid.FeaturesInArea(x, y, r, lo, hi), expected) << x << " " << y << " " << r << " " << lo << " " << hi;
+    EXPECT_EQ(grid.FeaturesInArea(x, y, r, lo, hi), expected)
+        << x << " " << y << " " << r << " " << lo << " " << hi;
     grid.FeaturesInArea(x, y, r, lo, hi, reused);
     EXPECT_EQ(reused, expected);
   }

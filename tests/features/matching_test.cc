@@ -42,10 +42,10 @@ TEST(RotationHistogram, KeepsTheThreeDominantBins) {
   EXPECT_EQ(h.BinOf(-1.0f), 29);
   EXPECT_EQ(h.BinOf(725.0f), 0);
   int id = 0;
-  for (int i = 0; i < 50; ++i) h.Add(3.0f, id++);      // bin 0: ids 0..49
-  for (int i = 0; i < 20; ++i) h.Add(-5.0f, id++);     // bin 29: ids 50..69
-  for (int i = 0; i < 6; ++i) h.Add(14.0f, id++);      // bin 1: ids 70..75 (>= 10 % of 50)
-  for (int i = 0; i < 4; ++i) h.Add(100.0f, id++);     // bin 8: ids 76..79 (4th largest)
+  for (int i = 0; i < 50; ++i) h.Add(3.0f, id++);   // bin 0: ids 0..49
+  for (int i = 0; i < 20; ++i) h.Add(-5.0f, id++);  // bin 29: ids 50..69
+  for (int i = 0; i < 6; ++i) h.Add(14.0f, id++);   // bin 1: ids 70..75 (>= 10 % of 50)
+  for (int i = 0; i < 4; ++i) h.Add(100.0f, id++);  // bin 8: ids 76..79 (4th largest)
   EXPECT_EQ(h.DominantBins(), (std::vector<int>{0, 29, 1}));
   EXPECT_EQ(h.Inconsistent(), (std::vector<int>{76, 77, 78, 79}));
   EXPECT_EQ(h.Consistent().size(), 76u);

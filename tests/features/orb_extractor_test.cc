@@ -83,7 +83,8 @@ TEST(SelectSpreadOut, EveryCellGetsOneBeforeAnyGetsTwo) {
   // 1000 strong candidates packed in the top-left 10x10 pixels, and one weak candidate per 10x10 cell of a
   // 100x100 area: 100 picks must take every cell's candidate (the packed corner counts as one cell).
   std::vector<CornerCandidate> candidates;
-  for (int i = 0; i < 1000; ++i) candidates.push_back({static_cast<float>(i % 10), static_cast<float>(i / 100), 100.0f + i});
+  for (int i = 0; i < 1000; ++i)
+    candidates.push_back({static_cast<float>(i % 10), static_cast<float>(i / 100), 100.0f + i});
   for (int cy = 0; cy < 10; ++cy) {
     for (int cx = 0; cx < 10; ++cx) {
       if (cx == 0 && cy == 0) continue;
@@ -124,7 +125,8 @@ void ExpectWellFormed(const FeatureSet& f, const cv::Mat& image, const OrbOption
     EXPECT_GE(kp.level, 0);
     EXPECT_LT(kp.level, options.num_levels);
     // At least edge_threshold level pixels from the border.
-    const float margin = static_cast<float>(options.edge_threshold) * f.pyramid.scale[static_cast<size_t>(kp.level)] - 2.0f;
+    const float margin =
+        static_cast<float>(options.edge_threshold) * f.pyramid.scale[static_cast<size_t>(kp.level)] - 2.0f;
     EXPECT_GE(kp.pixel.x(), margin);
     EXPECT_GE(kp.pixel.y(), margin);
     EXPECT_LE(kp.pixel.x(), image.cols - 1 - margin);
@@ -177,7 +179,8 @@ TEST(OrbExtractor, KittiFramesGetTheFullCountSpreadOverTheImage) {
     // have none at FAST threshold 7), more of them than with OpenCV's ORB, and none hoards them.
     const FeatureSet reference = OpenCvOrb(image);
     EXPECT_GE(RegionsWithFeatures(f, 8, 3, 15), 21) << "frame " << index;
-    EXPECT_GE(RegionsWithFeatures(f, 8, 3, 15), RegionsWithFeatures(reference, 8, 3, 15)) << "frame " << index;
+    EXPECT_GE(RegionsWithFeatures(f, 8, 3, 15), RegionsWithFeatures(reference, 8, 3, 15))
+        << "frame " << index;
     EXPECT_EQ(RegionsWithFeatures(f, 8, 3, 300), 0) << "frame " << index;
   }
 }
@@ -215,7 +218,8 @@ TEST(OrbExtractor, MaskExcludesPixelsAndTheCountIsKept) {
   // Half the image holds fewer corners than the budget on some levels; the rest is found elsewhere.
   EXPECT_GT(f.size(), 1600u);
   for (const auto& kp : f.keypoints) {
-    const int x = static_cast<int>(std::lround(kp.pixel.x())), y = static_cast<int>(std::lround(kp.pixel.y()));
+    const int x = static_cast<int>(std::lround(kp.pixel.x())),
+              y = static_cast<int>(std::lround(kp.pixel.y()));
     EXPECT_NE(mask.at<std::uint8_t>(y, x), 0) << kp.pixel.transpose();
   }
   EXPECT_THROW(extractor.Extract(image, cv::Mat(10, 10, CV_8UC1)), InvalidArgument);
@@ -244,14 +248,16 @@ TEST(OrbExtractor, ColourInputAndPyramidOutput) {
 struct Correspondence {
   size_t ia, ib;
 };
-std::vector<Correspondence> GeometricCorrespondences(const FeatureSet& a, const FeatureSet& b, const cv::Matx23d& m,
-                                                     int level_offset = 0, double scale = 1.0) {
+std::vector<Correspondence> GeometricCorrespondences(const FeatureSet& a, const FeatureSet& b,
+                                                     const cv::Matx23d& m, int level_offset = 0,
+                                                     double scale = 1.0) {
   std::vector<Correspondence> out;
   for (size_t i = 0; i < a.size(); ++i) {
     const auto& kp = a.keypoints[i];
     const double x = kp.pixel.x(), y = kp.pixel.y();
     const double px = m(0, 0) * x + m(0, 1) * y + m(0, 2), py = m(1, 0) * x + m(1, 1) * y + m(1, 2);
-    const double radius = 1.5 * b.pyramid.scale[static_cast<size_t>(std::clamp(kp.level - level_offset, 0, 7))] * scale;
+    const double radius =
+        1.5 * b.pyramid.scale[static_cast<size_t>(std::clamp(kp.level - level_offset, 0, 7))] * scale;
     double best = radius;
     int best_j = -1;
     for (size_t j = 0; j < b.size(); ++j) {
@@ -267,7 +273,8 @@ std::vector<Correspondence> GeometricCorrespondences(const FeatureSet& a, const 
   return out;
 }
 
-void ExpectRotationInvariance(const FeatureSet& a, const FeatureSet& b, const cv::Matx23d& a_to_b, double degrees) {
+void ExpectRotationInvariance(const FeatureSet& a, const FeatureSet& b, const cv::Matx23d& a_to_b,
+                              double degrees) {
   const auto corr = GeometricCorrespondences(a, b, a_to_b);
   ASSERT_GT(corr.size(), 300u);
   std::vector<float> angle_error;
@@ -277,7 +284,8 @@ void ExpectRotationInvariance(const FeatureSet& a, const FeatureSet& b, const cv
     angle_error.push_back(std::abs(AngleDifference(a.keypoints[c.ia].angle_deg - b.keypoints[c.ib].angle_deg,
                                                    static_cast<float>(degrees))));
     distance.push_back(HammingDistance(a.descriptors[c.ia], b.descriptors[c.ib]));
-    random_distance.push_back(HammingDistance(a.descriptors[c.ia], b.descriptors[corr[(k + 37) % corr.size()].ib]));
+    random_distance.push_back(
+        HammingDistance(a.descriptors[c.ia], b.descriptors[corr[(k + 37) % corr.size()].ib]));
   }
   EXPECT_LT(Median(angle_error), 3.0f) << "rotation " << degrees;
   EXPECT_LT(Median(distance), 32) << "rotation " << degrees;
@@ -322,7 +330,8 @@ TEST(OrbExtractor, ScaleLevelsFollowTheImageScale) {
   const OrbExtractor extractor;
   const FeatureSet a = extractor.Extract(image);
   const FeatureSet b = extractor.Extract(small);
-  const double sx = static_cast<double>(small.cols) / image.cols, sy = static_cast<double>(small.rows) / image.rows;
+  const double sx = static_cast<double>(small.cols) / image.cols,
+               sy = static_cast<double>(small.rows) / image.rows;
   const cv::Matx23d m(sx, 0, 0.5 * sx - 0.5, 0, sy, 0.5 * sy - 0.5);
   // Correspondences at level offset 2 are plentiful and agree in descriptor...
   const auto shifted = GeometricCorrespondences(a, b, m, 2, 1.0);
@@ -333,7 +342,8 @@ TEST(OrbExtractor, ScaleLevelsFollowTheImageScale) {
   // ...and more plentiful than at offset 0 (levels not adjusted for scale).
   const auto same = GeometricCorrespondences(a, b, m, 0, 1.0);
   std::vector<int> distance_same;
-  for (const auto& c : same) distance_same.push_back(HammingDistance(a.descriptors[c.ia], b.descriptors[c.ib]));
+  for (const auto& c : same)
+    distance_same.push_back(HammingDistance(a.descriptors[c.ia], b.descriptors[c.ib]));
   EXPECT_LT(Median(distance), Median(distance_same));
 }
 

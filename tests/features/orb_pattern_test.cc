@@ -24,7 +24,8 @@ TEST(BriefPattern, StoredTableIsWhatTheLearningProcedureGives) {
   // Reproduces orb_pattern_table.inc from its documented recipe (takes a few seconds).
   PatternLearningStats stats;
   const BriefPattern learned = LearnBriefPattern(PatternLearningOptions{}, &stats);
-  EXPECT_EQ(learned, SemslamBriefPattern()) << "regenerate orb_pattern_table.inc with FormatBriefPatternTable";
+  EXPECT_EQ(learned, SemslamBriefPattern())
+      << "regenerate orb_pattern_table.inc with FormatBriefPatternTable";
   EXPECT_GT(stats.training_patches, 20000);
   // Less biased and less correlated than the same number of plain Gaussian tests.
   std::vector<BriefPair> gaussian = GenerateGaussianPairs(99, 256);

@@ -54,7 +54,8 @@ struct DisparityErrors {
   float p90_error = 0;
 };
 
-DisparityErrors CheckDisparities(const cv::Mat& left, const cv::Mat& right, const std::function<float(int)>& disparity) {
+DisparityErrors CheckDisparities(const cv::Mat& left, const cv::Mat& right,
+                                 const std::function<float(int)>& disparity) {
   const OrbExtractor extractor;
   ImagePyramid pl, pr;
   const FeatureSet fl = extractor.Extract(left, {}, &pl);
@@ -167,8 +168,9 @@ TEST(MatchStereo, RealKitti00PairsGivePlausibleDepthsConsistentWithTheMotion) {
   const cv::Mat l1 = Read(seq / "image_0" / "000001.png"), r1 = Read(seq / "image_1" / "000001.png");
   ASSERT_FALSE(l0.empty() || r0.empty() || l1.empty() || r1.empty());
   if (cv::norm(l0, r0, cv::NORM_L1) == 0.0) {
-    GTEST_SKIP() << "kitti_odom_00_pyslam: image_1 is byte-identical to image_0 (the folder holds no real right "
-                    "images), so there is no real stereo pair to test";
+    GTEST_SKIP()
+        << "kitti_odom_00_pyslam: image_1 is byte-identical to image_0 (the folder holds no real right "
+           "images), so there is no real stereo pair to test";
   }
   const StereoRig rig = KittiRig();
   const OrbExtractor extractor;
@@ -185,7 +187,8 @@ TEST(MatchStereo, RealKitti00PairsGivePlausibleDepthsConsistentWithTheMotion) {
   const float median_depth = Median(depths);
   EXPECT_GT(median_depth, 5.0f);
   EXPECT_LT(median_depth, 40.0f);
-  const auto plausible = std::count_if(depths.begin(), depths.end(), [](float d) { return d > 1.0f && d < 200.0f; });
+  const auto plausible =
+      std::count_if(depths.begin(), depths.end(), [](float d) { return d > 1.0f && d < 200.0f; });
   EXPECT_GT(static_cast<double>(plausible), 0.95 * static_cast<double>(depths.size()));
   // Move frame-0 points with the true motion into frame 1: their depth there agrees with frame 1's stereo.
   const Eigen::Matrix4d world_from_0 = KittiPose(root / "poses" / "00.txt", 0);
@@ -196,11 +199,12 @@ TEST(MatchStereo, RealKitti00PairsGivePlausibleDepthsConsistentWithTheMotion) {
   for (size_t i = 0; i < fl0.size(); ++i) {
     const int j = matches[i];
     if (j < 0 || s0.depth[i] <= 0 || s0.depth[i] > 30 || s1.depth[static_cast<size_t>(j)] <= 0) continue;
-    const Eigen::Vector3d x0 = rig.Triangulate(fl0.keypoints[i].pixel.cast<double>(),
-                                               fl0.keypoints[i].pixel.x() - s0.right_u[i]);
+    const Eigen::Vector3d x0 =
+        rig.Triangulate(fl0.keypoints[i].pixel.cast<double>(), fl0.keypoints[i].pixel.x() - s0.right_u[i]);
     const Eigen::Vector3d x1 = (c1_from_c0 * x0.homogeneous()).head<3>();
     relative_error.push_back(std::abs(x1.z() - s1.depth[static_cast<size_t>(j)]) / x1.z());
-    reprojection.push_back((rig.left.Project(x1) - fl1.keypoints[static_cast<size_t>(j)].pixel.cast<double>()).norm());
+    reprojection.push_back(
+        (rig.left.Project(x1) - fl1.keypoints[static_cast<size_t>(j)].pixel.cast<double>()).norm());
   }
   ASSERT_GT(relative_error.size(), 200u);
   EXPECT_LT(Median(relative_error), 0.05);

@@ -28,12 +28,13 @@ TEST(VocabCli, TrainConvertAndInfo) {
   testing::TempDir dir;
   std::filesystem::create_directories(dir / "images");
   for (int i = 0; i < 12; ++i) {
-    cv::imwrite((dir / "images" / (std::to_string(100 + i) + ".png")).string(), MakeSyntheticTrainingImage(300 + i));
+    cv::imwrite((dir / "images" / (std::to_string(100 + i) + ".png")).string(),
+                MakeSyntheticTrainingImage(300 + i));
   }
   const auto log = dir / "log.txt";
-  ASSERT_EQ(RunSemslam("vocab train --images " + (dir / "images").string() + " --out " + (dir / "v.voc").string() +
-                    " --k 4 --levels 3 --features 300 --max-images 10",
-                log),
+  ASSERT_EQ(RunSemslam("vocab train --images " + (dir / "images").string() + " --out " +
+                           (dir / "v.voc").string() + " --k 4 --levels 3 --features 300 --max-images 10",
+                       log),
             0)
       << Read(log);
   EXPECT_NE(Read(log).find("10 images"), std::string::npos) << Read(log);
@@ -53,15 +54,24 @@ TEST(VocabCli, TrainConvertAndInfo) {
     for (int i = 0; i < 32; ++i) tiny << " 255";
     tiny << " 0.5\n";
   }
-  ASSERT_EQ(RunSemslam("vocab convert --dbow2 " + (dir / "tiny.txt").string() + " --out " + (dir / "tiny.voc").string(), log), 0)
+  ASSERT_EQ(RunSemslam("vocab convert --dbow2 " + (dir / "tiny.txt").string() + " --out " +
+                           (dir / "tiny.voc").string(),
+                       log),
+            0)
       << Read(log);
   EXPECT_EQ(Vocabulary::Load(dir / "tiny.voc"), Vocabulary::LoadDbow2Text(dir / "tiny.txt"));
 
   // Errors: a one-line reason, non-zero status.
-  EXPECT_NE(RunSemslam("vocab train --images " + (dir / "nowhere").string() + " --out " + (dir / "x.voc").string(), log), 0);
+  EXPECT_NE(
+      RunSemslam("vocab train --images " + (dir / "nowhere").string() + " --out " + (dir / "x.voc").string(),
+                 log),
+      0);
   EXPECT_NE(Read(log).find("nowhere"), std::string::npos) << Read(log);
   std::ofstream(dir / "broken.txt") << "2 1 0 0\n0 1 5\n";
-  EXPECT_NE(RunSemslam("vocab convert --dbow2 " + (dir / "broken.txt").string() + " --out " + (dir / "y.voc").string(), log), 0);
+  EXPECT_NE(RunSemslam("vocab convert --dbow2 " + (dir / "broken.txt").string() + " --out " +
+                           (dir / "y.voc").string(),
+                       log),
+            0);
   EXPECT_NE(Read(log).find("broken.txt:2"), std::string::npos) << Read(log);
   EXPECT_FALSE(std::filesystem::exists(dir / "y.voc"));
 }

@@ -23,12 +23,12 @@ std::string Bytes(int first, int rest) {
 std::string TinyDbow2() {
   std::ostringstream s;
   s << "2 2  0 0\n";
-  s << "0 0 " << Bytes(0, 0) << " 0\n";        // 1
-  s << "1 1 " << Bytes(0, 0) << " 0.5\n";      // 2: leaf under 1 (word 0 in the file)
-  s << "1 1 " << Bytes(255, 0) << " 1\n";      // 3: leaf under 1
-  s << "0 0 " << Bytes(255, 255) << " 0\n";    // 4
-  s << "4 1 " << Bytes(255, 255) << " 2\n";    // 5: leaf under 4
-  s << "4 1 " << Bytes(0, 255) << " 0.75\n";   // 6: leaf under 4
+  s << "0 0 " << Bytes(0, 0) << " 0\n";       // 1
+  s << "1 1 " << Bytes(0, 0) << " 0.5\n";     // 2: leaf under 1 (word 0 in the file)
+  s << "1 1 " << Bytes(255, 0) << " 1\n";     // 3: leaf under 1
+  s << "0 0 " << Bytes(255, 255) << " 0\n";   // 4
+  s << "4 1 " << Bytes(255, 255) << " 2\n";   // 5: leaf under 4
+  s << "4 1 " << Bytes(0, 255) << " 0.75\n";  // 6: leaf under 4
   s << "\n";
   return s.str();
 }

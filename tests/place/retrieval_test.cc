@@ -24,7 +24,8 @@ const Vocabulary& SyntheticVocabulary() {
     orb.num_features = 1000;
     const OrbExtractor extractor(orb);
     std::vector<std::vector<Descriptor>> images;
-    for (int i = 0; i < 60; ++i) images.push_back(extractor.Extract(MakeSyntheticTrainingImage(1000 + i)).descriptors);
+    for (int i = 0; i < 60; ++i)
+      images.push_back(extractor.Extract(MakeSyntheticTrainingImage(1000 + i)).descriptors);
     VocabularyTrainingOptions options;
     options.branching = 10;
     options.depth = 4;
@@ -35,7 +36,8 @@ const Vocabulary& SyntheticVocabulary() {
 
 cv::Mat Perturb(const cv::Mat& image, int seed) {
   // A few pixels of motion, a small rotation, brightness change and noise.
-  const cv::Mat m = cv::getRotationMatrix2D(cv::Point2f(image.cols / 2.0f, image.rows / 2.0f), 2.0 + seed % 3, 1.0);
+  const cv::Mat m =
+      cv::getRotationMatrix2D(cv::Point2f(image.cols / 2.0f, image.rows / 2.0f), 2.0 + seed % 3, 1.0);
   cv::Mat moved;
   cv::Mat shift = m.clone();
   shift.at<double>(0, 2) += 6;
@@ -57,15 +59,18 @@ TEST(Retrieval, PerturbedImagesFindTheirOriginalFirst) {
     db.Add(static_cast<std::uint64_t>(i), vocabulary.Transform(extractor.Extract(images.back()).descriptors));
   }
   for (int i = 0; i < 30; ++i) {
-    const BowVector query = vocabulary.Transform(extractor.Extract(Perturb(images[static_cast<size_t>(i)], i)).descriptors);
+    const BowVector query =
+        vocabulary.Transform(extractor.Extract(Perturb(images[static_cast<size_t>(i)], i)).descriptors);
     const auto results = db.Query(query);
     ASSERT_GE(results.size(), 2u);
     EXPECT_EQ(results[0].id, static_cast<std::uint64_t>(i));
     // A small vocabulary and images from one generator: unrelated images share many words (score ~0.25).
     EXPECT_GT(results[0].score, 1.15 * results[1].score) << "image " << i;
     // The same image itself scores 1.
-    EXPECT_NEAR(db.Query(vocabulary.Transform(extractor.Extract(images[static_cast<size_t>(i)]).descriptors))[0].score,
-                1.0, 1e-12);
+    EXPECT_NEAR(
+        db.Query(vocabulary.Transform(extractor.Extract(images[static_cast<size_t>(i)]).descriptors))[0]
+            .score,
+        1.0, 1e-12);
   }
 }
 
@@ -79,7 +84,8 @@ TEST(Retrieval, KittiFramesFindTheirNeighboursWithAVocabularyNeverTrainedOnKitti
     return cv::imread((root / "sequences" / "07" / "image_0" / name).string(), cv::IMREAD_GRAYSCALE);
   };
   KeyFrameDatabase db(vocabulary.size());
-  for (int i = 0; i < 160; i += 10) db.Add(static_cast<std::uint64_t>(i), vocabulary.Transform(extractor.Extract(frame(i)).descriptors));
+  for (int i = 0; i < 160; i += 10)
+    db.Add(static_cast<std::uint64_t>(i), vocabulary.Transform(extractor.Extract(frame(i)).descriptors));
   int right = 0, total = 0;
   for (int i = 3; i < 160; i += 10) {  // 3 frames (about 2-3 m) after a database frame
     const auto results = db.Query(vocabulary.Transform(extractor.Extract(frame(i)).descriptors));
@@ -127,7 +133,8 @@ TEST(BowMatching, MatchesAShiftedImageThroughTheDirectIndex) {
   const OrbExtractor extractor;
   const cv::Mat image = MakeSyntheticTrainingImage(77, cv::Size(1241, 376));
   cv::Mat shifted;
-  cv::warpAffine(image, shifted, cv::Matx23d(1, 0, 9, 0, 1, 2), image.size(), cv::INTER_NEAREST, cv::BORDER_REFLECT_101);
+  cv::warpAffine(image, shifted, cv::Matx23d(1, 0, 9, 0, 1, 2), image.size(), cv::INTER_NEAREST,
+                 cv::BORDER_REFLECT_101);
   const FeatureSet f1 = extractor.Extract(image), f2 = extractor.Extract(shifted);
   BowVector b1, b2;
   FeatureVector v1, v2;
@@ -141,7 +148,8 @@ TEST(BowMatching, MatchesAShiftedImageThroughTheDirectIndex) {
     ++n;
     ++used[static_cast<size_t>(matches[i])];
     const Eigen::Vector2f d = f2.keypoints[static_cast<size_t>(matches[i])].pixel - f1.keypoints[i].pixel;
-    right += (d - Eigen::Vector2f(9, 2)).norm() < 1.5f * f1.pyramid.scale[static_cast<size_t>(f1.keypoints[i].level)];
+    right += (d - Eigen::Vector2f(9, 2)).norm() <
+             1.5f * f1.pyramid.scale[static_cast<size_t>(f1.keypoints[i].level)];
   }
   EXPECT_GT(n, 600);
   EXPECT_GT(right, 0.95 * n);  // the rest: windows of a repeated grid

@@ -23,7 +23,8 @@ Vocabulary TinyVocabulary(BowWeighting weighting = BowWeighting::kTfIdf) {
   const Descriptor zeros{}, ones{kOnes, kOnes, kOnes, kOnes};
   const Descriptor low_byte{0xFF, 0, 0, 0}, ones_but_low{kOnes << 8, kOnes, kOnes, kOnes};
   return Vocabulary::FromTree(2, 2, weighting, OrbDescriptorPattern::kSemslam, {0, 0, 0, 1, 1, 2, 2},
-                              {zeros, zeros, ones, zeros, low_byte, ones, ones_but_low}, {0.5, 1.0, 2.0, 0.0});
+                              {zeros, zeros, ones, zeros, low_byte, ones, ones_but_low},
+                              {0.5, 1.0, 2.0, 0.0});
 }
 
 TEST(Vocabulary, HandMadeTinyVocabularyGivesKnownTfIdfVectors) {
@@ -122,7 +123,8 @@ TEST(Vocabulary, TrainingSeparatesClustersAndComputesIdf) {
 
 TEST(Vocabulary, TrainingOnFewOrIdenticalDescriptors) {
   // Fewer descriptors than k: each becomes a word.
-  const std::vector<std::vector<Descriptor>> few = {{Descriptor{1, 0, 0, 0}, Descriptor{2, 0, 0, 0}}, {Descriptor{4, 0, 0, 0}}};
+  const std::vector<std::vector<Descriptor>> few = {{Descriptor{1, 0, 0, 0}, Descriptor{2, 0, 0, 0}},
+                                                    {Descriptor{4, 0, 0, 0}}};
   VocabularyTrainingOptions options;
   const Vocabulary v = Vocabulary::Train(few, options);
   EXPECT_EQ(v.size(), 3u);
@@ -150,7 +152,8 @@ TEST(Vocabulary, SaveLoadRoundTripIsExact) {
   // Saving again gives the same bytes.
   loaded.Save(dir / "w.voc");
   std::ifstream a(dir / "v.voc", std::ios::binary), b(dir / "w.voc", std::ios::binary);
-  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}),
+            std::string(std::istreambuf_iterator<char>(b), {}));
 }
 
 std::string ReadAll(const std::filesystem::path& p) {

@@ -11,8 +11,8 @@ FeatureGrid::FeatureGrid(const FeatureSet& features)
     : FeatureGrid(features, 0.0f, 0.0f, static_cast<float>(std::max(features.image_width, 1)),
                   static_cast<float>(std::max(features.image_height, 1))) {}
 
-FeatureGrid::FeatureGrid(const FeatureSet& features, float min_x, float min_y, float max_x, float max_y, int cols,
-                         int rows)
+FeatureGrid::FeatureGrid(const FeatureSet& features, float min_x, float min_y, float max_x, float max_y,
+                         int cols, int rows)
     : cols_(cols), rows_(rows), min_x_(min_x), min_y_(min_y) {
   Require(cols >= 1 && rows >= 1, "FeatureGrid: need at least one cell");
   Require(std::isfinite(min_x) && std::isfinite(min_y) && std::isfinite(max_x) && std::isfinite(max_y) &&
@@ -26,8 +26,10 @@ FeatureGrid::FeatureGrid(const FeatureSet& features, float min_x, float min_y, f
   cell_start_.assign(num_cells + 1, 0);
   for (size_t i = 0; i < features.keypoints.size(); ++i) {
     const Keypoint& kp = features.keypoints[i];
-    const int cx = std::clamp(static_cast<int>(std::floor((kp.pixel.x() - min_x_) * inv_cell_w_)), 0, cols - 1);
-    const int cy = std::clamp(static_cast<int>(std::floor((kp.pixel.y() - min_y_) * inv_cell_h_)), 0, rows - 1);
+    const int cx =
+        std::clamp(static_cast<int>(std::floor((kp.pixel.x() - min_x_) * inv_cell_w_)), 0, cols - 1);
+    const int cy =
+        std::clamp(static_cast<int>(std::floor((kp.pixel.y() - min_y_) * inv_cell_h_)), 0, rows - 1);
     cell_of[i] = cy * cols + cx;
     ++cell_start_[static_cast<size_t>(cell_of[i]) + 1];
   }
@@ -41,7 +43,8 @@ FeatureGrid::FeatureGrid(const FeatureSet& features, float min_x, float min_y, f
   }
 }
 
-std::vector<int> FeatureGrid::FeaturesInArea(float x, float y, float radius, int min_level, int max_level) const {
+std::vector<int> FeatureGrid::FeaturesInArea(float x, float y, float radius, int min_level,
+                                             int max_level) const {
   std::vector<int> out;
   FeaturesInArea(x, y, radius, min_level, max_level, out);
   return out;

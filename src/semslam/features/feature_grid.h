@@ -25,9 +25,11 @@ class FeatureGrid {
   // Indices of the keypoints with |x_k - x| <= radius and |y_k - y| <= radius (a square window, as the
   // search windows of projection matching are) whose level is in [min_level, max_level]. A negative
   // min_level means no lower bound, a negative max_level no upper bound. Indices in increasing order.
-  std::vector<int> FeaturesInArea(float x, float y, float radius, int min_level = -1, int max_level = -1) const;
+  std::vector<int> FeaturesInArea(float x, float y, float radius, int min_level = -1,
+                                  int max_level = -1) const;
   // The same, appending to `out` (cleared first) to reuse its storage.
-  void FeaturesInArea(float x, float y, float radius, int min_level, int max_level, std::vector<int>& out) const;
+  void FeaturesInArea(float x, float y, float radius, int min_level, int max_level,
+                      std::vector<int>& out) const;
 
   bool empty() const { return num_points_ == 0; }
   int cols() const { return cols_; }
@@ -44,7 +46,7 @@ class FeatureGrid {
   float inv_cell_w_ = 0, inv_cell_h_ = 0;
   int num_points_ = 0;
   std::vector<std::int32_t> cell_start_;  // cols * rows + 1 offsets into entries_
-  std::vector<Entry> entries_;             // by cell, then by index
+  std::vector<Entry> entries_;            // by cell, then by index
 };
 
 }  // namespace semslam

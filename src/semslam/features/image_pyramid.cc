@@ -13,7 +13,8 @@ cv::Size PyramidLevelSize(cv::Size size, float scale) {
 }
 
 void InitImagePyramid(const cv::Mat& grey, const PyramidGeometry& geometry, ImagePyramid& pyramid) {
-  Require(!grey.empty() && grey.type() == CV_8UC1, "image pyramid: need a non-empty 8-bit single-channel image");
+  Require(!grey.empty() && grey.type() == CV_8UC1,
+          "image pyramid: need a non-empty 8-bit single-channel image");
   Require(geometry.num_levels >= 1 && static_cast<int>(geometry.scale.size()) == geometry.num_levels,
           "image pyramid: bad pyramid geometry");
   const auto n = static_cast<size_t>(geometry.num_levels);

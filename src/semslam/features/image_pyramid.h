@@ -21,8 +21,12 @@ struct ImagePyramid {
   int num_levels() const { return static_cast<int>(levels.size()); }
   bool empty() const { return levels.empty(); }
 
-  float ToLevel0X(float x, int level) const { return (x + 0.5f) * ratio_x[static_cast<size_t>(level)] - 0.5f; }
-  float ToLevel0Y(float y, int level) const { return (y + 0.5f) * ratio_y[static_cast<size_t>(level)] - 0.5f; }
+  float ToLevel0X(float x, int level) const {
+    return (x + 0.5f) * ratio_x[static_cast<size_t>(level)] - 0.5f;
+  }
+  float ToLevel0Y(float y, int level) const {
+    return (y + 0.5f) * ratio_y[static_cast<size_t>(level)] - 0.5f;
+  }
   float FromLevel0X(float x0, int level) const {
     return (x0 + 0.5f) / ratio_x[static_cast<size_t>(level)] - 0.5f;
   }

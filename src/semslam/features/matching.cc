@@ -68,7 +68,8 @@ std::vector<int> RotationHistogram::Inconsistent() const {
 
 void InitializationMatchOptions::Check() const {
   Require(ratio > 0.0f && ratio <= 1.0f, "initialization matching: ratio must be in (0, 1]");
-  Require(max_distance >= 0 && max_distance <= 256, "initialization matching: max_distance must be in [0, 256]");
+  Require(max_distance >= 0 && max_distance <= 256,
+          "initialization matching: max_distance must be in [0, 256]");
   Require(max_level >= 0, "initialization matching: max_level must be >= 0");
 }
 
@@ -83,7 +84,8 @@ std::vector<int> MatchForInitialization(const FeatureSet& f1, const FeatureSet& 
                                         const std::vector<Eigen::Vector2f>& prior_positions, float window,
                                         const InitializationMatchOptions& options) {
   options.Check();
-  Require(prior_positions.size() == f1.size(), "MatchForInitialization: need one prior position per f1 keypoint");
+  Require(prior_positions.size() == f1.size(),
+          "MatchForInitialization: need one prior position per f1 keypoint");
   Require(window >= 0.0f, "MatchForInitialization: window must be >= 0");
   std::vector<int> matches12(f1.size(), -1);
   std::vector<int> matches21(f2.size(), -1);
@@ -122,7 +124,8 @@ void BruteForceMatchOptions::Check() const {
   Require(max_distance >= 0 && max_distance <= 256, "brute-force matching: max_distance must be in [0, 256]");
 }
 
-std::vector<int> MatchBruteForce(const FeatureSet& f1, const FeatureSet& f2, const BruteForceMatchOptions& options) {
+std::vector<int> MatchBruteForce(const FeatureSet& f1, const FeatureSet& f2,
+                                 const BruteForceMatchOptions& options) {
   options.Check();
   std::vector<int> matches12(f1.size(), -1);
   for (size_t i = 0; i < f1.size(); ++i) {

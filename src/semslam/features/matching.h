@@ -42,7 +42,8 @@ struct BestTwo {
 
 // Best two of `descriptors[c]` for c in `candidates` against `query`.
 template <typename IndexRange>
-BestTwo FindBestTwo(const Descriptor& query, const IndexRange& candidates, const std::vector<Descriptor>& descriptors) {
+BestTwo FindBestTwo(const Descriptor& query, const IndexRange& candidates,
+                    const std::vector<Descriptor>& descriptors) {
   BestTwo result;
   for (const auto c : candidates) {
     result.Offer(static_cast<int>(c), HammingDistance(query, descriptors[static_cast<size_t>(c)]));
@@ -75,7 +76,7 @@ struct InitializationMatchOptions {
   float ratio = 0.9f;                          // nearest / second-nearest
   int max_distance = MatcherThresholds::kLow;  // Hamming
   bool check_orientation = true;
-  int max_level = 0;                           // only keypoints of levels [0, max_level] in both frames
+  int max_level = 0;  // only keypoints of levels [0, max_level] in both frames
   void Check() const;
 };
 
@@ -99,6 +100,7 @@ struct BruteForceMatchOptions {
   void Check() const;
 };
 // Exhaustive matching (for tests, tools and small sets): matches12 as above.
-std::vector<int> MatchBruteForce(const FeatureSet& f1, const FeatureSet& f2, const BruteForceMatchOptions& options = {});
+std::vector<int> MatchBruteForce(const FeatureSet& f1, const FeatureSet& f2,
+                                 const BruteForceMatchOptions& options = {});
 
 }  // namespace semslam

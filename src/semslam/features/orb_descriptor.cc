@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <numbers>
-#include <optional>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 namespace semslam {
 namespace {
@@ -89,7 +89,8 @@ inline int RoundSmall(float v) { return static_cast<int>(v + 128.5f) - 128; }
 
 }  // namespace
 
-Descriptor ComputeSteeredBrief(const cv::Mat& smoothed, int x, int y, float angle_deg, const BriefPattern& pattern) {
+Descriptor ComputeSteeredBrief(const cv::Mat& smoothed, int x, int y, float angle_deg,
+                               const BriefPattern& pattern) {
   static const SteeringTable kDefaultTable(SemslamBriefPattern());
   const bool is_default = &pattern == &SemslamBriefPattern();
   std::optional<SteeringTable> own;

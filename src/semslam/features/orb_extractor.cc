@@ -53,7 +53,8 @@ void DetectFast(const cv::Mat& image, int x0, int y0, int x1, int y1, int thresh
   const int rx1 = std::min(image.cols, x1 + kMargin), ry1 = std::min(image.rows, y1 + kMargin);
   if (rx1 - rx0 < 7 || ry1 - ry0 < 7) return;
   scratch.clear();
-  cv::FAST(image(cv::Rect(rx0, ry0, rx1 - rx0, ry1 - ry0)), scratch, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+  cv::FAST(image(cv::Rect(rx0, ry0, rx1 - rx0, ry1 - ry0)), scratch, threshold, true,
+           cv::FastFeatureDetector::TYPE_9_16);
   for (const cv::KeyPoint& kp : scratch) {
     const float x = kp.pt.x + static_cast<float>(rx0), y = kp.pt.y + static_cast<float>(ry0);
     if (x < static_cast<float>(x0) || x >= static_cast<float>(x1) || y < static_cast<float>(y0) ||
@@ -126,8 +127,8 @@ std::vector<int> DistributeLevelBudgets(const std::vector<int>& wanted, const st
     const long start_deficit = deficit;
     for (size_t l = 0; l < n && deficit > 0; ++l) {
       if (result[l] >= available[l]) continue;
-      const long share =
-          std::max(1L, static_cast<long>(std::floor(static_cast<double>(start_deficit) * std::max(wanted[l], 1) / weight)));
+      const long share = std::max(1L, static_cast<long>(std::floor(static_cast<double>(start_deficit) *
+                                                                   std::max(wanted[l], 1) / weight)));
       const long add = std::min({share, static_cast<long>(available[l] - result[l]), deficit});
       result[l] += static_cast<int>(add);
       deficit -= add;
@@ -136,8 +137,8 @@ std::vector<int> DistributeLevelBudgets(const std::vector<int>& wanted, const st
   return result;
 }
 
-std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates, int budget, float x0, float y0,
-                                 float x1, float y1) {
+std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates, int budget, float x0,
+                                 float y0, float x1, float y1) {
   const int n = static_cast<int>(candidates.size());
   std::vector<int> chosen;
   if (budget <= 0 || n == 0) return chosen;
@@ -162,11 +163,13 @@ std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates,
     for (const CornerCandidate& c : candidates) ++start[255 - static_cast<size_t>(c.response) + 1];
     for (size_t b = 0; b < 256; ++b) start[b + 1] += start[b];
     for (int i = 0; i < n; ++i) {
-      order[static_cast<size_t>(start[255 - static_cast<size_t>(candidates[static_cast<size_t>(i)].response)]++)] = i;
+      order[static_cast<size_t>(
+          start[255 - static_cast<size_t>(candidates[static_cast<size_t>(i)].response)]++)] = i;
     }
   } else {
     std::vector<std::pair<float, int>> keyed(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i) keyed[static_cast<size_t>(i)] = {-candidates[static_cast<size_t>(i)].response, i};
+    for (int i = 0; i < n; ++i)
+      keyed[static_cast<size_t>(i)] = {-candidates[static_cast<size_t>(i)].response, i};
     std::sort(keyed.begin(), keyed.end());
     for (int i = 0; i < n; ++i) order[static_cast<size_t>(i)] = keyed[static_cast<size_t>(i)].second;
   }
@@ -186,7 +189,8 @@ std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates,
   // Full rounds fit; the last round is cut by strength.
   int last_round = 0;
   int taken = 0;
-  while (last_round < static_cast<int>(per_round.size()) && taken + per_round[static_cast<size_t>(last_round)] <= budget) {
+  while (last_round < static_cast<int>(per_round.size()) &&
+         taken + per_round[static_cast<size_t>(last_round)] <= budget) {
     taken += per_round[static_cast<size_t>(last_round)];
     ++last_round;
   }
@@ -224,7 +228,8 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
   auto run_task = [&](const Task& task) {
     Level& level = levels[static_cast<size_t>(task.level)];
     if (task.strip < 0) {
-      if (options_.pattern == OrbDescriptorPattern::kSemslam) SmoothForDescriptor(level.image, level.smoothed);
+      if (options_.pattern == OrbDescriptorPattern::kSemslam)
+        SmoothForDescriptor(level.image, level.smoothed);
       return;
     }
     const int s = task.strip;
@@ -275,8 +280,10 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
     for (const auto& s : level.strips) level.candidates.insert(level.candidates.end(), s.begin(), s.end());
     // Masked pixels get no keypoint; a cell whose corners are all masked counts as empty.
     auto masked = [&](const CornerCandidate& c) {
-      const int mx = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0X(c.x, static_cast<int>(l)))), 0, mask.cols - 1);
-      const int my = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0Y(c.y, static_cast<int>(l)))), 0, mask.rows - 1);
+      const int mx = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0X(c.x, static_cast<int>(l)))), 0,
+                                mask.cols - 1);
+      const int my = std::clamp(static_cast<int>(std::lround(pyramid.ToLevel0Y(c.y, static_cast<int>(l)))), 0,
+                                mask.rows - 1);
       return mask.at<std::uint8_t>(my, mx) == 0;
     };
     if (!mask.empty()) std::erase_if(level.candidates, masked);
@@ -296,8 +303,10 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
         for (int cx = 0; cx < cols; ++cx) {
           if (count[static_cast<size_t>(cy * cols + cx)] > 0) continue;
           // Cell bounds: the inverse of the binning above.
-          const int bx0 = level.x0 + (cx * w + cols - 1) / cols, bx1 = level.x0 + ((cx + 1) * w + cols - 1) / cols;
-          const int by0 = level.y0 + (cy * h + rows - 1) / rows, by1 = level.y0 + ((cy + 1) * h + rows - 1) / rows;
+          const int bx0 = level.x0 + (cx * w + cols - 1) / cols,
+                    bx1 = level.x0 + ((cx + 1) * w + cols - 1) / cols;
+          const int by0 = level.y0 + (cy * h + rows - 1) / rows,
+                    by1 = level.y0 + ((cy + 1) * h + rows - 1) / rows;
           DetectFast(level.image, bx0, by0, bx1, by1, options_.min_fast_threshold, scratch, level.candidates);
         }
       }
@@ -318,9 +327,9 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
   ForEach(options_.parallel, num_levels, [&](size_t l) {
     Level& level = levels[l];
     if (!level.usable() || budget[l] == 0) return;
-    const std::vector<int> chosen =
-        SelectSpreadOut(level.candidates, budget[l], static_cast<float>(level.x0), static_cast<float>(level.y0),
-                        static_cast<float>(level.x1), static_cast<float>(level.y1));
+    const std::vector<int> chosen = SelectSpreadOut(
+        level.candidates, budget[l], static_cast<float>(level.x0), static_cast<float>(level.y0),
+        static_cast<float>(level.x1), static_cast<float>(level.y1));
     level.keypoints.resize(chosen.size());
     if (options_.pattern == OrbDescriptorPattern::kSemslam) level.descriptors.resize(chosen.size());
     for (size_t k = 0; k < chosen.size(); ++k) {
@@ -347,7 +356,8 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
   features.descriptors.reserve(total);
   for (Level& level : levels) {
     features.keypoints.insert(features.keypoints.end(), level.keypoints.begin(), level.keypoints.end());
-    features.descriptors.insert(features.descriptors.end(), level.descriptors.begin(), level.descriptors.end());
+    features.descriptors.insert(features.descriptors.end(), level.descriptors.begin(),
+                                level.descriptors.end());
   }
 
   if (options_.pattern == OrbDescriptorPattern::kOpenCv && !features.keypoints.empty()) {
@@ -357,12 +367,14 @@ FeatureSet OrbExtractor::Extract(const cv::Mat& image, const cv::Mat& mask, Imag
     for (size_t i = 0; i < features.size(); ++i) {
       const Keypoint& kp = features.keypoints[i];
       const float s = geometry_.scale[static_cast<size_t>(kp.level)];
-      const float lx = pyramid.FromLevel0X(kp.pixel.x(), kp.level), ly = pyramid.FromLevel0Y(kp.pixel.y(), kp.level);
+      const float lx = pyramid.FromLevel0X(kp.pixel.x(), kp.level),
+                  ly = pyramid.FromLevel0Y(kp.pixel.y(), kp.level);
       cv_keypoints.emplace_back(cv::Point2f(std::round(lx) * s, std::round(ly) * s), 31.0f * s, kp.angle_deg,
                                 kp.response, kp.level, static_cast<int>(i));
     }
-    auto orb = cv::ORB::create(options_.num_features, options_.scale_factor, options_.num_levels, kMinKeypointBorder,
-                               0, 2, cv::ORB::FAST_SCORE, 31, options_.initial_fast_threshold);
+    auto orb =
+        cv::ORB::create(options_.num_features, options_.scale_factor, options_.num_levels, kMinKeypointBorder,
+                        0, 2, cv::ORB::FAST_SCORE, 31, options_.initial_fast_threshold);
     cv::Mat descriptors;
     orb->compute(grey, cv_keypoints, descriptors);
     FeatureSet kept = features;

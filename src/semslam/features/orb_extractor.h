@@ -18,7 +18,7 @@ enum class OrbDescriptorPattern {
 };
 
 struct OrbOptions {
-  int num_features = 2000;          // per image, over all levels
+  int num_features = 2000;  // per image, over all levels
   int num_levels = 8;
   float scale_factor = 1.2f;
   int initial_fast_threshold = 20;  // FAST threshold tried first in every cell
@@ -26,9 +26,9 @@ struct OrbOptions {
   // Keypoints keep at least this distance (level pixels) from their level's border: the orientation disc
   // and the steered pattern must fit. >= kMinKeypointBorder (16).
   int edge_threshold = 16;
-  int cell_size = 32;               // side (level pixels) of the adaptive-threshold cells
+  int cell_size = 32;  // side (level pixels) of the adaptive-threshold cells
   OrbDescriptorPattern pattern = OrbDescriptorPattern::kSemslam;
-  bool parallel = true;             // spread the work over cores with TBB
+  bool parallel = true;  // spread the work over cores with TBB
 
   // Throws InvalidArgument naming the bad field.
   void Check() const;
@@ -73,7 +73,7 @@ struct CornerCandidate {
   float x = 0, y = 0;
   float response = 0;
 };
-std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates, int budget, float x0, float y0, float x1,
-                                 float y1);
+std::vector<int> SelectSpreadOut(const std::vector<CornerCandidate>& candidates, int budget, float x0,
+                                 float y0, float x1, float y1);
 
 }  // namespace semslam

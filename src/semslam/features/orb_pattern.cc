@@ -89,7 +89,9 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
     }
   }
   auto intensity = [&] { return cv::Scalar(random.UniformInt(0, 255)); };
-  auto rand_point = [&] { return cv::Point(random.UniformInt(-w / 8, w + w / 8), random.UniformInt(-h / 8, h + h / 8)); };
+  auto rand_point = [&] {
+    return cv::Point(random.UniformInt(-w / 8, w + w / 8), random.UniformInt(-h / 8, h + h / 8));
+  };
   const int num_shapes = random.UniformInt(60, 140);
   for (int i = 0; i < num_shapes; ++i) {
     const int kind = random.UniformInt(0, 6);
@@ -121,10 +123,11 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
         break;
       }
       case 2: {  // ellipse
-        cv::ellipse(image, c, cv::Size(static_cast<int>(scale * (0.2 + random.Uniform())) + 1,
-                                       static_cast<int>(scale * (0.2 + random.Uniform())) + 1),
-                    random.Uniform() * 180, 0, 360, intensity(), random.UniformInt(0, 2) == 0 ? 2 : cv::FILLED,
-                    cv::LINE_AA);
+        cv::ellipse(image, c,
+                    cv::Size(static_cast<int>(scale * (0.2 + random.Uniform())) + 1,
+                             static_cast<int>(scale * (0.2 + random.Uniform())) + 1),
+                    random.Uniform() * 180, 0, 360, intensity(),
+                    random.UniformInt(0, 2) == 0 ? 2 : cv::FILLED, cv::LINE_AA);
         break;
       }
       case 3: {  // line
@@ -149,22 +152,24 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
         const int ry = static_cast<int>(scale * (0.5 + random.Uniform())) + 4;
         cv::Mat texture(2 * ry + 1, 2 * rx + 1, CV_32FC1);
         for (int y = 0; y < texture.rows; ++y) {
-          for (int x = 0; x < texture.cols; ++x) texture.at<float>(y, x) = static_cast<float>(random.Gaussian());
+          for (int x = 0; x < texture.cols; ++x)
+            texture.at<float>(y, x) = static_cast<float>(random.Gaussian());
         }
         const double blur = 0.7 + 2.5 * random.Uniform();
         cv::GaussianBlur(texture, texture, cv::Size(0, 0), blur);
         const double contrast = (20 + 60 * random.Uniform()) * blur;
         const double base = 30 + 190 * random.Uniform();
         cv::Mat region_mask = cv::Mat::zeros(texture.size(), CV_8UC1);
-        cv::ellipse(region_mask, cv::Point(rx, ry), cv::Size(rx, ry), random.Uniform() * 180, 0, 360, cv::Scalar(255),
-                    cv::FILLED);
+        cv::ellipse(region_mask, cv::Point(rx, ry), cv::Size(rx, ry), random.Uniform() * 180, 0, 360,
+                    cv::Scalar(255), cv::FILLED);
         for (int y = 0; y < texture.rows; ++y) {
           const int iy = c.y - ry + y;
           if (iy < 0 || iy >= h) continue;
           for (int x = 0; x < texture.cols; ++x) {
             const int ix = c.x - rx + x;
             if (ix < 0 || ix >= w || region_mask.at<std::uint8_t>(y, x) == 0) continue;
-            image.at<std::uint8_t>(iy, ix) = cv::saturate_cast<std::uint8_t>(base + contrast * texture.at<float>(y, x));
+            image.at<std::uint8_t>(iy, ix) =
+                cv::saturate_cast<std::uint8_t>(base + contrast * texture.at<float>(y, x));
           }
         }
         break;
@@ -178,7 +183,8 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
   // Rotate the whole composition by a random angle so that axis-aligned shapes lose their preference.
   {
     const double a = random.Uniform() * 360.0;
-    const cv::Mat rot = cv::getRotationMatrix2D(cv::Point2f(static_cast<float>(w) / 2, static_cast<float>(h) / 2), a, 1.0);
+    const cv::Mat rot =
+        cv::getRotationMatrix2D(cv::Point2f(static_cast<float>(w) / 2, static_cast<float>(h) / 2), a, 1.0);
     cv::Mat rotated;
     cv::warpAffine(image, rotated, rot, size, cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
     image = rotated;
@@ -265,13 +271,16 @@ TestBits EvaluateTests(const TrainingSet& set, const std::vector<BriefPair>& tes
     const TrainingPatch& p = set.patches[k];
     const cv::Mat& img = set.smoothed[static_cast<size_t>(p.image)];
     auto pixel = [&](int px, int py) {
-      const int u = static_cast<int>(std::floor(static_cast<float>(px) * p.c - static_cast<float>(py) * p.s + 0.5f));
-      const int v = static_cast<int>(std::floor(static_cast<float>(px) * p.s + static_cast<float>(py) * p.c + 0.5f));
+      const int u =
+          static_cast<int>(std::floor(static_cast<float>(px) * p.c - static_cast<float>(py) * p.s + 0.5f));
+      const int v =
+          static_cast<int>(std::floor(static_cast<float>(px) * p.s + static_cast<float>(py) * p.c + 0.5f));
       return img.at<std::uint8_t>(p.y + v, p.x + u);
     };
     for (size_t t = 0; t < tests.size(); ++t) {
       const BriefPair& q = tests[t];
-      if (pixel(q.x1, q.y1) < pixel(q.x2, q.y2)) out.bits[t * out.words + k / 64] |= std::uint64_t{1} << (k % 64);
+      if (pixel(q.x1, q.y1) < pixel(q.x2, q.y2))
+        out.bits[t * out.words + k / 64] |= std::uint64_t{1} << (k % 64);
     }
   }
   for (size_t t = 0; t < tests.size(); ++t) {
@@ -313,7 +322,8 @@ BriefPattern LearnBriefPattern(const PatternLearningOptions& options, PatternLea
   options.Check();
   const TrainingSet set = MakeTrainingSet(options);
   Require(set.patches.size() >= 1000, "pattern learning: too few training patches");
-  const std::vector<BriefPair> candidates = GenerateGaussianPairs(options.seed, options.num_candidates, options.candidate_sigma);
+  const std::vector<BriefPair> candidates =
+      GenerateGaussianPairs(options.seed, options.num_candidates, options.candidate_sigma);
   const TestBits bits = EvaluateTests(set, candidates);
   const size_t n = set.patches.size();
   // Order by closeness of the mean to 0.5 (ties by index, for determinism).
@@ -349,7 +359,8 @@ BriefPattern LearnBriefPattern(const PatternLearningOptions& options, PatternLea
   return pattern;
 }
 
-PatternLearningStats EvaluateBriefPattern(const BriefPattern& pattern, const PatternLearningOptions& options) {
+PatternLearningStats EvaluateBriefPattern(const BriefPattern& pattern,
+                                          const PatternLearningOptions& options) {
   options.Check();
   const TrainingSet set = MakeTrainingSet(options);
   const std::vector<BriefPair> tests(pattern.begin(), pattern.end());
@@ -361,7 +372,8 @@ PatternLearningStats EvaluateBriefPattern(const BriefPattern& pattern, const Pat
 
 std::string FormatBriefPatternTable(const BriefPattern& pattern) {
   std::ostringstream out;
-  out << "// Generated by semslam::LearnBriefPattern(PatternLearningOptions{}) (orb_pattern.h); do not edit.\n";
+  out << "// Generated by semslam::LearnBriefPattern(PatternLearningOptions{}) (orb_pattern.h); do not "
+         "edit.\n";
   for (const BriefPair& p : pattern) {
     out << "{" << int{p.x1} << ", " << int{p.y1} << ", " << int{p.x2} << ", " << int{p.y2} << "},\n";
   }

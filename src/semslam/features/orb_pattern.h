@@ -23,8 +23,8 @@ class PatternRandom {
  public:
   explicit PatternRandom(std::uint64_t seed) : state_(seed) {}
   std::uint64_t Next();
-  double Uniform();   // [0, 1)
-  double Gaussian();  // N(0, 1), Box-Muller
+  double Uniform();                // [0, 1)
+  double Gaussian();               // N(0, 1), Box-Muller
   int UniformInt(int lo, int hi);  // [lo, hi]
 
  private:

@@ -12,9 +12,9 @@ namespace semslam {
 
 struct Keypoint {
   Eigen::Vector2f pixel = Eigen::Vector2f::Zero();  // level-0 image coordinates, sub-pixel
-  float angle_deg = 0.0f;                            // orientation (intensity centroid), [0, 360)
-  float response = 0.0f;                             // FAST/Harris score used for ranking
-  int level = 0;                                     // pyramid level it was detected on
+  float angle_deg = 0.0f;                           // orientation (intensity centroid), [0, 360)
+  float response = 0.0f;                            // FAST/Harris score used for ranking
+  int level = 0;                                    // pyramid level it was detected on
 };
 
 // 256 bits, as four 64-bit words so that the Hamming distance is four popcounts.
@@ -29,9 +29,9 @@ inline int HammingDistance(const Descriptor& a, const Descriptor& b) {
 struct PyramidGeometry {
   int num_levels = 8;
   float scale_factor = 1.2f;
-  std::vector<float> scale;            // scale_factor^l
-  std::vector<float> inv_scale;        // 1 / scale[l]
-  std::vector<float> sigma2;           // scale[l]^2: keypoint position variance at level l (pixels^2)
+  std::vector<float> scale;      // scale_factor^l
+  std::vector<float> inv_scale;  // 1 / scale[l]
+  std::vector<float> sigma2;     // scale[l]^2: keypoint position variance at level l (pixels^2)
   std::vector<float> inv_sigma2;
 
   static PyramidGeometry Make(int num_levels, float scale_factor);

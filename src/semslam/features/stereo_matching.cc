@@ -18,8 +18,10 @@ void StereoMatchOptions::Check() const {
           "stereo matching: max_descriptor_distance must be in [0, 256]");
   Require(row_band >= 0.0f, "stereo matching: row_band must be >= 0");
   Require(max_level_difference >= 0, "stereo matching: max_level_difference must be >= 0");
-  Require(patch_half_size >= 1 && patch_half_size <= 15, "stereo matching: patch_half_size must be in [1, 15]");
-  Require(search_half_range >= 1 && search_half_range <= 32, "stereo matching: search_half_range must be in [1, 32]");
+  Require(patch_half_size >= 1 && patch_half_size <= 15,
+          "stereo matching: patch_half_size must be in [1, 15]");
+  Require(search_half_range >= 1 && search_half_range <= 32,
+          "stereo matching: search_half_range must be in [1, 32]");
   Require(outlier_factor > 0.0f, "stereo matching: outlier_factor must be positive");
   Require(ratio > 0.0f && ratio <= 1.0f, "stereo matching: ratio must be in (0, 1]");
 }
@@ -49,7 +51,8 @@ struct RowIndex {
     for (size_t j = 0; j < right.keypoints.size(); ++j) {
       int r0, r1;
       range(right.keypoints[j], r0, r1);
-      for (int r = r0; r <= r1; ++r) entries[static_cast<size_t>(fill[static_cast<size_t>(r)]++)] = static_cast<int>(j);
+      for (int r = r0; r <= r1; ++r)
+        entries[static_cast<size_t>(fill[static_cast<size_t>(r)]++)] = static_cast<int>(j);
     }
   }
 };
@@ -81,11 +84,13 @@ float PatchCost(const cv::Mat& left, int xl, const cv::Mat& right, int xr, int y
 }  // namespace
 
 StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const cv::Mat& left_image,
-                          const cv::Mat& right_image, const StereoRig& rig, const StereoMatchOptions& options) {
+                          const cv::Mat& right_image, const StereoRig& rig,
+                          const StereoMatchOptions& options) {
   Require(!left_image.empty() && !right_image.empty() && left_image.size() == right_image.size(),
           "MatchStereo: need two images of the same size");
   cv::Mat left_grey = left_image, right_grey = right_image;
-  Require(left_image.type() == CV_8UC1 && right_image.type() == CV_8UC1, "MatchStereo: need 8-bit grey images");
+  Require(left_image.type() == CV_8UC1 && right_image.type() == CV_8UC1,
+          "MatchStereo: need 8-bit grey images");
   ImagePyramid left_pyramid, right_pyramid;
   tbb::parallel_invoke([&] { left_pyramid = BuildImagePyramid(left_grey, left.pyramid); },
                        [&] { right_pyramid = BuildImagePyramid(right_grey, right.pyramid); });
@@ -93,15 +98,18 @@ StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const
 }
 
 StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const ImagePyramid& left_pyramid,
-                          const ImagePyramid& right_pyramid, const StereoRig& rig, const StereoMatchOptions& options) {
+                          const ImagePyramid& right_pyramid, const StereoRig& rig,
+                          const StereoMatchOptions& options) {
   options.Check();
   rig.Check();
-  Require(left.keypoints.size() == left.descriptors.size() && right.keypoints.size() == right.descriptors.size(),
-          "MatchStereo: keypoints and descriptors differ in number");
+  Require(
+      left.keypoints.size() == left.descriptors.size() && right.keypoints.size() == right.descriptors.size(),
+      "MatchStereo: keypoints and descriptors differ in number");
   Require(!left_pyramid.empty() && left_pyramid.num_levels() == right_pyramid.num_levels() &&
               left_pyramid.levels[0].size() == right_pyramid.levels[0].size(),
           "MatchStereo: the two pyramids differ");
-  Require(left.pyramid.num_levels <= left_pyramid.num_levels() && right.pyramid.num_levels <= right_pyramid.num_levels(),
+  Require(left.pyramid.num_levels <= left_pyramid.num_levels() &&
+              right.pyramid.num_levels <= right_pyramid.num_levels(),
           "MatchStereo: features have more levels than the pyramids");
   StereoMatches out;
   out.right_u.assign(left.size(), -1.0f);
@@ -130,7 +138,8 @@ StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const
       if (kr.pixel.x() < min_u || kr.pixel.x() > max_u) continue;
       best.Offer(j, HammingDistance(left.descriptors[i], right.descriptors[static_cast<size_t>(j)]));
     }
-    if (!best.found() || best.best > options.max_descriptor_distance || !best.PassesRatio(options.ratio)) return;
+    if (!best.found() || best.best > options.max_descriptor_distance || !best.PassesRatio(options.ratio))
+      return;
 
     // Sub-pixel refinement on the left keypoint's level.
     const int level = kl.level;
@@ -177,9 +186,10 @@ StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const
     cost[i] = best_cost;
   };
   if (options.parallel) {
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, left.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) match_one(i);
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, left.size(), 64),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t i = r.begin(); i != r.end(); ++i) match_one(i);
+                      });
   } else {
     for (size_t i = 0; i < left.size(); ++i) match_one(i);
   }

@@ -23,11 +23,11 @@ struct StereoMatchOptions {
   // Nearest / second-nearest descriptor distance among the row candidates (1 turns the test off). Repeated
   // structure (windows, fences) gives near ties; the test drops those ambiguous matches.
   float ratio = 0.9f;
-  float row_band = 2.0f;             // rows searched: |v_right - v_left| <= row_band * scale(level)
-  int max_level_difference = 1;      // right keypoint's level within this of the left's
-  int patch_half_size = 5;           // correlation patch (2h+1)^2 on the keypoint's level
-  int search_half_range = 5;         // level pixels searched each side of the descriptor match
-  float outlier_factor = 2.1f;       // drop matches whose cost exceeds this times the median cost
+  float row_band = 2.0f;         // rows searched: |v_right - v_left| <= row_band * scale(level)
+  int max_level_difference = 1;  // right keypoint's level within this of the left's
+  int patch_half_size = 5;       // correlation patch (2h+1)^2 on the keypoint's level
+  int search_half_range = 5;     // level pixels searched each side of the descriptor match
+  float outlier_factor = 2.1f;   // drop matches whose cost exceeds this times the median cost
   // Sub-pixel offset from the costs c(-1), c(0), c(+1) around the minimum: a parabola through them, or two
   // lines of opposite slope ("equiangular", Shimizu & Okutomi 2005), the exact model for SAD costs.
   enum class SubpixelFit { kParabola, kEquiangular };
@@ -46,7 +46,8 @@ struct StereoMatches {
 
 // The images are the rectified left and right level-0 images the features were extracted from.
 StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const cv::Mat& left_image,
-                          const cv::Mat& right_image, const StereoRig& rig, const StereoMatchOptions& options = {});
+                          const cv::Mat& right_image, const StereoRig& rig,
+                          const StereoMatchOptions& options = {});
 // The same with the pyramids the extractor built (OrbExtractor::Extract's `pyramid` output): saves
 // rebuilding them.
 StereoMatches MatchStereo(const FeatureSet& left, const FeatureSet& right, const ImagePyramid& left_pyramid,

@@ -23,7 +23,8 @@ std::vector<int> MatchByBow(const FeatureSet& f1, const FeatureVector& fv1, cons
       BestTwo best;
       for (const int i2 : indices2) {
         if (i2 < 0 || static_cast<size_t>(i2) >= f2.size()) continue;
-        best.Offer(i2, HammingDistance(f1.descriptors[static_cast<size_t>(i1)], f2.descriptors[static_cast<size_t>(i2)]));
+        best.Offer(i2, HammingDistance(f1.descriptors[static_cast<size_t>(i1)],
+                                       f2.descriptors[static_cast<size_t>(i2)]));
       }
       if (!best.found() || best.best > options.max_distance || !best.PassesRatio(options.ratio)) continue;
       const size_t j = static_cast<size_t>(best.best_index);

@@ -47,7 +47,8 @@ void KeyFrameDatabase::EraseLocked(std::uint64_t id) {
   const std::uint32_t slot = it->second;
   for (const WordId word : words_of_slot_[slot]) {
     auto& postings = inverted_[word];
-    const auto p = std::find_if(postings.begin(), postings.end(), [&](const Posting& q) { return q.slot == slot; });
+    const auto p =
+        std::find_if(postings.begin(), postings.end(), [&](const Posting& q) { return q.slot == slot; });
     if (p != postings.end()) {
       *p = postings.back();
       postings.pop_back();
@@ -77,7 +78,8 @@ bool KeyFrameDatabase::Contains(std::uint64_t id) const {
   return slot_of_.count(id) > 0;
 }
 
-std::vector<DatabaseResult> KeyFrameDatabase::Query(const BowVector& bow, const DatabaseQueryOptions& options) const {
+std::vector<DatabaseResult> KeyFrameDatabase::Query(const BowVector& bow,
+                                                    const DatabaseQueryOptions& options) const {
   std::shared_lock lock(mutex_);
   // Accumulate per keyframe slot, word by word in increasing word order (the order ScoreL1 sums in, so the
   // scores are exactly those of Vocabulary::Score).

@@ -21,7 +21,7 @@ struct DatabaseResult {
 };
 
 struct DatabaseQueryOptions {
-  size_t max_results = 0;   // 0: all
+  size_t max_results = 0;  // 0: all
   int min_shared_words = 1;
   double min_score = 0.0;
   // Keyframes for which it returns false are skipped (e.g. the query's own covisible keyframes).
@@ -53,10 +53,10 @@ class KeyFrameDatabase {
   void EraseLocked(std::uint64_t id);
 
   mutable std::shared_mutex mutex_;
-  std::vector<std::vector<Posting>> inverted_;          // word -> postings
+  std::vector<std::vector<Posting>> inverted_;  // word -> postings
   std::unordered_map<std::uint64_t, std::uint32_t> slot_of_;
   std::vector<std::uint64_t> id_of_slot_;
-  std::vector<std::vector<WordId>> words_of_slot_;      // to erase postings
+  std::vector<std::vector<WordId>> words_of_slot_;  // to erase postings
   std::vector<std::uint32_t> free_slots_;
 };
 

@@ -12,7 +12,8 @@ namespace semslam {
 void RetrievalOptions::Check() const {
   Require(database_every >= 1, "retrieval: database_every must be >= 1");
   Require(exclude_recent >= 0, "retrieval: exclude_recent must be >= 0");
-  Require(same_place_distance > 0 && same_place_angle_deg > 0, "retrieval: same-place thresholds must be positive");
+  Require(same_place_distance > 0 && same_place_angle_deg > 0,
+          "retrieval: same-place thresholds must be positive");
 }
 
 namespace {
@@ -23,9 +24,11 @@ double Median(std::vector<double> v) {
 }
 }  // namespace
 
-RetrievalResult EvaluateRetrieval(const Vocabulary& vocabulary, const std::vector<std::vector<Descriptor>>& descriptors,
+RetrievalResult EvaluateRetrieval(const Vocabulary& vocabulary,
+                                  const std::vector<std::vector<Descriptor>>& descriptors,
                                   const std::vector<Eigen::Vector3d>& positions,
-                                  const std::vector<Eigen::Vector3d>& directions, const RetrievalOptions& options) {
+                                  const std::vector<Eigen::Vector3d>& directions,
+                                  const RetrievalOptions& options) {
   options.Check();
   Require(descriptors.size() == positions.size() && positions.size() == directions.size(),
           "retrieval: one position and direction per frame needed");
@@ -41,11 +44,16 @@ RetrievalResult EvaluateRetrieval(const Vocabulary& vocabulary, const std::vecto
   std::vector<BowVector> bows(descriptors.size());
   for (size_t i = 0; i < descriptors.size(); ++i) bows[i] = vocabulary.Transform(descriptors[i]);
   for (size_t i = 0; i < descriptors.size(); ++i) {
-    const size_t newest = i >= static_cast<size_t>(options.exclude_recent) ? i - static_cast<size_t>(options.exclude_recent) : 0;
-    const bool any_old = !in_database.empty() && in_database.front() + static_cast<size_t>(options.exclude_recent) <= i;
+    const size_t newest = i >= static_cast<size_t>(options.exclude_recent)
+                              ? i - static_cast<size_t>(options.exclude_recent)
+                              : 0;
+    const bool any_old =
+        !in_database.empty() && in_database.front() + static_cast<size_t>(options.exclude_recent) <= i;
     if (any_old) {
       DatabaseQueryOptions query;
-      query.filter = [&](std::uint64_t id) { return id + static_cast<std::uint64_t>(options.exclude_recent) <= i; };
+      query.filter = [&](std::uint64_t id) {
+        return id + static_cast<std::uint64_t>(options.exclude_recent) <= i;
+      };
       const auto results = database.Query(bows[i], query);
       ++result.queries;
       bool revisit = false;

@@ -40,9 +40,9 @@ void VocabularyTrainingOptions::Check() const {
   Require(static_cast<std::uint32_t>(weighting) <= 3, "vocabulary training: bad weighting");
 }
 
-Vocabulary Vocabulary::FromTree(int branching, int depth, BowWeighting weighting, OrbDescriptorPattern pattern,
-                                std::vector<NodeId> parent, std::vector<Descriptor> descriptors,
-                                std::vector<double> leaf_weights) {
+Vocabulary Vocabulary::FromTree(int branching, int depth, BowWeighting weighting,
+                                OrbDescriptorPattern pattern, std::vector<NodeId> parent,
+                                std::vector<Descriptor> descriptors, std::vector<double> leaf_weights) {
   Require(branching >= 2 && branching <= kMaxBranching, "vocabulary: branching must be in [2, 256]");
   Require(depth >= 1 && depth <= kMaxDepth, "vocabulary: depth must be in [1, 16]");
   Require(static_cast<std::uint32_t>(weighting) <= 3, "vocabulary: bad weighting");
@@ -88,7 +88,8 @@ void Vocabulary::BuildIndex() {
   }
   Require(word_weight_.size() == words_.size(),
           fmt::format("vocabulary: {} word weights for {} leaves", word_weight_.size(), words_.size()));
-  for (const double w : word_weight_) Require(std::isfinite(w) && w >= 0.0, "vocabulary: word weights must be finite and >= 0");
+  for (const double w : word_weight_)
+    Require(std::isfinite(w) && w >= 0.0, "vocabulary: word weights must be finite and >= 0");
 }
 
 WordId Vocabulary::Word(const Descriptor& descriptor) const {
@@ -121,8 +122,8 @@ WordId Vocabulary::Word(const Descriptor& descriptor, int level, NodeId* node_at
   return static_cast<WordId>(node_word_[node]);
 }
 
-void Vocabulary::Transform(const std::vector<Descriptor>& descriptors, BowVector* bow, FeatureVector* features,
-                           int direct_index_level) const {
+void Vocabulary::Transform(const std::vector<Descriptor>& descriptors, BowVector* bow,
+                           FeatureVector* features, int direct_index_level) const {
   if (direct_index_level < 0) direct_index_level = DefaultDirectIndexLevel();
   if (features != nullptr) features->clear();
   std::vector<WordId> words(descriptors.size());
@@ -145,10 +146,18 @@ void Vocabulary::Transform(const std::vector<Descriptor>& descriptors, BowVector
     const double idf = word_weight_[words[i]];
     double value = 0.0;
     switch (weighting_) {
-      case BowWeighting::kTfIdf: value = count * idf; break;
-      case BowWeighting::kTf: value = count; break;
-      case BowWeighting::kIdf: value = idf; break;
-      case BowWeighting::kBinary: value = 1.0; break;
+      case BowWeighting::kTfIdf:
+        value = count * idf;
+        break;
+      case BowWeighting::kTf:
+        value = count;
+        break;
+      case BowWeighting::kIdf:
+        value = idf;
+        break;
+      case BowWeighting::kBinary:
+        value = 1.0;
+        break;
     }
     if (value > 0.0) entries.emplace_back(words[i], value);
     i = j;
@@ -198,7 +207,8 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
   const auto depth = reader.Get<std::uint32_t>();
   const auto weighting = reader.Get<std::uint32_t>();
   const auto pattern = reader.Get<std::uint32_t>();
-  if (branching < 2 || branching > kMaxBranching) reader.Fail(fmt::format("bad branching factor {}", branching));
+  if (branching < 2 || branching > kMaxBranching)
+    reader.Fail(fmt::format("bad branching factor {}", branching));
   if (depth < 1 || depth > kMaxDepth) reader.Fail(fmt::format("bad depth {}", depth));
   if (weighting > 3) reader.Fail(fmt::format("bad weighting {}", weighting));
   if (pattern > 1) reader.Fail(fmt::format("bad descriptor pattern {}", pattern));
@@ -207,9 +217,9 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
   auto weights = reader.GetVector<double>();
   if (!reader.AtEnd()) reader.Fail("trailing bytes after the vocabulary");
   try {
-    return FromTree(static_cast<int>(branching), static_cast<int>(depth), static_cast<BowWeighting>(weighting),
-                    static_cast<OrbDescriptorPattern>(pattern), std::move(parent), std::move(descriptors),
-                    std::move(weights));
+    return FromTree(static_cast<int>(branching), static_cast<int>(depth),
+                    static_cast<BowWeighting>(weighting), static_cast<OrbDescriptorPattern>(pattern),
+                    std::move(parent), std::move(descriptors), std::move(weights));
   } catch (const InvalidArgument& e) {
     throw InputError(path, e.what());
   }
@@ -229,12 +239,14 @@ Vocabulary Vocabulary::LoadDbow2Text(const std::filesystem::path& path) {
   const long long levels = ParseInt(head[1], reader.Where(), "L");
   const long long scoring = ParseInt(head[2], reader.Where(), "scoring");
   const long long weighting = ParseInt(head[3], reader.Where(), "weighting");
-  if (k < 2 || k > kMaxBranching) throw InputError(reader.Where(), "k", "branching factor must be in [2, 256]");
+  if (k < 2 || k > kMaxBranching)
+    throw InputError(reader.Where(), "k", "branching factor must be in [2, 256]");
   if (levels < 1 || levels > kMaxDepth) throw InputError(reader.Where(), "L", "depth must be in [1, 16]");
   if (scoring < 0 || scoring > 5) throw InputError(reader.Where(), "scoring", "must be in [0, 5]");
   if (weighting < 0 || weighting > 3) throw InputError(reader.Where(), "weighting", "must be in [0, 3]");
   if (scoring != 0) {
-    spdlog::warn("{}: vocabulary made for scoring type {}; semslam scores with L1 (type 0)", path.string(), scoring);
+    spdlog::warn("{}: vocabulary made for scoring type {}; semslam scores with L1 (type 0)", path.string(),
+                 scoring);
   }
 
   // Nodes in file order (id = position, root = 0).
@@ -255,7 +267,8 @@ Vocabulary Vocabulary::LoadDbow2Text(const std::filesystem::path& path) {
     const auto id = static_cast<NodeId>(file_parent.size());
     const long long parent = ParseInt(tokens[0], where, "parent");
     if (parent < 0 || parent >= static_cast<long long>(id)) {
-      throw InputError(where, "parent", fmt::format("node {} names parent {}, which is not an earlier node", id, parent));
+      throw InputError(where, "parent",
+                       fmt::format("node {} names parent {}, which is not an earlier node", id, parent));
     }
     if (file_leaf[static_cast<size_t>(parent)]) {
       throw InputError(where, "parent", fmt::format("parent {} is a leaf", parent));
@@ -265,7 +278,8 @@ Vocabulary Vocabulary::LoadDbow2Text(const std::filesystem::path& path) {
     std::uint8_t bytes[32];
     for (size_t b = 0; b < 32; ++b) {
       const long long value = ParseInt(tokens[2 + b], where, "descriptor byte");
-      if (value < 0 || value > 255) throw InputError(where, "descriptor byte", fmt::format("{} is not in [0, 255]", value));
+      if (value < 0 || value > 255)
+        throw InputError(where, "descriptor byte", fmt::format("{} is not in [0, 255]", value));
       bytes[b] = static_cast<std::uint8_t>(value);
     }
     const double weight = ParseDouble(tokens[34], where, "weight");
@@ -286,7 +300,8 @@ Vocabulary Vocabulary::LoadDbow2Text(const std::filesystem::path& path) {
   if (file_parent.size() < 2) throw InputError(path, "the vocabulary has no nodes");
   for (size_t i = 1; i < file_parent.size(); ++i) {
     if (!file_leaf[i] && children[i].empty()) {
-      throw InputError(SourceLocation{path, line_of[i]}, "is_leaf", fmt::format("node {} is not a leaf but has no children", i));
+      throw InputError(SourceLocation{path, line_of[i]}, "is_leaf",
+                       fmt::format("node {} is not a leaf but has no children", i));
     }
   }
   // Renumber breadth first.
@@ -309,7 +324,8 @@ Vocabulary Vocabulary::LoadDbow2Text(const std::filesystem::path& path) {
   }
   try {
     return FromTree(static_cast<int>(k), static_cast<int>(levels), static_cast<BowWeighting>(weighting),
-                    OrbDescriptorPattern::kOpenCv, std::move(parent), std::move(descriptors), std::move(weights));
+                    OrbDescriptorPattern::kOpenCv, std::move(parent), std::move(descriptors),
+                    std::move(weights));
   } catch (const InvalidArgument& e) {
     throw InputError(path, e.what());
   }

@@ -48,7 +48,8 @@ class Vocabulary {
 
   // Trains on the descriptors of a set of images (one vector per image; the images are the documents of
   // the IDF weights). `progress` (optional) is called with a line of text now and then.
-  static Vocabulary Train(const std::vector<std::vector<Descriptor>>& images, const VocabularyTrainingOptions& options,
+  static Vocabulary Train(const std::vector<std::vector<Descriptor>>& images,
+                          const VocabularyTrainingOptions& options,
                           const std::function<void(const std::string&)>& progress = {});
 
   // Reads a vocabulary saved by Save(); a file in DBoW2's text format is recognized and read too.
@@ -81,8 +82,8 @@ class Vocabulary {
 
   // BoW vector (L1-normalized) and, if asked, the direct index at `direct_index_level` levels below the
   // root (default: DefaultDirectIndexLevel()).
-  void Transform(const std::vector<Descriptor>& descriptors, BowVector* bow, FeatureVector* features = nullptr,
-                 int direct_index_level = -1) const;
+  void Transform(const std::vector<Descriptor>& descriptors, BowVector* bow,
+                 FeatureVector* features = nullptr, int direct_index_level = -1) const;
   BowVector Transform(const std::vector<Descriptor>& descriptors) const;
   // The L1 score of two vectors of this vocabulary, in [0, 1].
   double Score(const BowVector& a, const BowVector& b) const { return ScoreL1(a, b); }

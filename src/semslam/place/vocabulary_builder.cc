@@ -17,8 +17,10 @@ namespace {
 
 bool IsImageFile(const std::filesystem::path& p) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  static const std::set<std::string> kExtensions = {".png", ".jpg", ".jpeg", ".pgm", ".ppm", ".bmp", ".tif", ".tiff"};
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  static const std::set<std::string> kExtensions = {".png", ".jpg", ".jpeg", ".pgm",
+                                                    ".ppm", ".bmp", ".tif",  ".tiff"};
   return kExtensions.count(ext) > 0;
 }
 
@@ -48,7 +50,8 @@ std::vector<std::filesystem::path> ListTrainingImages(const std::vector<std::fil
       std::error_code ec;
       if (std::filesystem::is_directory(folder / "sequences")) {
         for (const auto& entry : std::filesystem::directory_iterator(folder / "sequences", ec)) {
-          if (std::filesystem::is_directory(entry.path() / "image_0")) subfolders.push_back(entry.path() / "image_0");
+          if (std::filesystem::is_directory(entry.path() / "image_0"))
+            subfolders.push_back(entry.path() / "image_0");
         }
       }
       std::sort(subfolders.begin(), subfolders.end());
@@ -57,7 +60,8 @@ std::vector<std::filesystem::path> ListTrainingImages(const std::vector<std::fil
         images.insert(images.end(), more.begin(), more.end());
       }
     }
-    if (images.empty()) throw InputError(folder, "no images in this folder (nor in image_0/ or sequences/*/image_0/)");
+    if (images.empty())
+      throw InputError(folder, "no images in this folder (nor in image_0/ or sequences/*/image_0/)");
     all.insert(all.end(), images.begin(), images.end());
   }
   if (max_images > 0 && all.size() > max_images) {
@@ -69,9 +73,9 @@ std::vector<std::filesystem::path> ListTrainingImages(const std::vector<std::fil
   return all;
 }
 
-std::vector<std::vector<Descriptor>> ExtractTrainingDescriptors(const std::vector<std::filesystem::path>& images,
-                                                                const OrbOptions& orb,
-                                                                const std::function<void(size_t, size_t)>& progress) {
+std::vector<std::vector<Descriptor>> ExtractTrainingDescriptors(
+    const std::vector<std::filesystem::path>& images, const OrbOptions& orb,
+    const std::function<void(size_t, size_t)>& progress) {
   OrbOptions options = orb;
   options.parallel = false;  // parallel over images instead
   const OrbExtractor extractor(options);

@@ -140,7 +140,8 @@ Clustering KMajority(const std::vector<Descriptor>& all, const std::vector<std::
         std::uint32_t* row = cnt.data() + c * 256;
         for (size_t w = 0; w < 4; ++w) {
           const std::uint64_t bits = d[w];
-          for (size_t bit = 0; bit < 64; ++bit) row[w * 64 + bit] += static_cast<std::uint32_t>((bits >> bit) & 1u);
+          for (size_t bit = 0; bit < 64; ++bit)
+            row[w * 64 + bit] += static_cast<std::uint32_t>((bits >> bit) & 1u);
         }
         ++sz[c];
       }
@@ -177,7 +178,8 @@ Clustering KMajority(const std::vector<Descriptor>& all, const std::vector<std::
 
 }  // namespace
 
-Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images, const VocabularyTrainingOptions& options,
+Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
+                             const VocabularyTrainingOptions& options,
                              const std::function<void(const std::string&)>& progress) {
   options.Check();
   std::vector<Descriptor> all;
@@ -220,9 +222,10 @@ Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
       if (splits[i].centers.size() <= 1) splits[i] = {};  // identical descriptors: nothing to split
     };
     if (options.parallel) {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, level_nodes.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) split(i);
-      });
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, level_nodes.size(), 1),
+                        [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) split(i);
+                        });
     } else {
       for (size_t i = 0; i < level_nodes.size(); ++i) split(i);
     }
@@ -254,8 +257,8 @@ Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
     for (size_t i = 1; i < parent.size(); ++i) ++children[parent[i]];
     for (size_t i = 1; i < parent.size(); ++i) num_leaves += children[i] == 0;
   }
-  Vocabulary vocabulary = FromTree(options.branching, options.depth, options.weighting, options.pattern, parent,
-                                   node_descriptor, std::vector<double>(num_leaves, 1.0));
+  Vocabulary vocabulary = FromTree(options.branching, options.depth, options.weighting, options.pattern,
+                                   parent, node_descriptor, std::vector<double>(num_leaves, 1.0));
   if (options.weighting == BowWeighting::kTfIdf || options.weighting == BowWeighting::kIdf) {
     std::vector<std::vector<WordId>> image_words(images.size());
     auto words_of = [&](size_t i) {
@@ -266,9 +269,10 @@ Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
       w.erase(std::unique(w.begin(), w.end()), w.end());
     };
     if (options.parallel) {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, images.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) words_of(i);
-      });
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, images.size(), 1),
+                        [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) words_of(i);
+                        });
     } else {
       for (size_t i = 0; i < images.size(); ++i) words_of(i);
     }
@@ -278,12 +282,14 @@ Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
     }
     const double n = static_cast<double>(images.size());
     for (size_t w = 0; w < num_leaves; ++w) {
-      vocabulary.word_weight_[w] = std::log(n / static_cast<double>(std::max<std::uint32_t>(documents[w], 1)));
+      vocabulary.word_weight_[w] =
+          std::log(n / static_cast<double>(std::max<std::uint32_t>(documents[w], 1)));
     }
   }
   if (progress) {
     progress(fmt::format("vocabulary: {} words, {} nodes from {} descriptors of {} images in {:.1f} s",
-                         vocabulary.size(), vocabulary.num_nodes(), all.size(), images.size(), watch.ElapsedSeconds()));
+                         vocabulary.size(), vocabulary.num_nodes(), all.size(), images.size(),
+                         watch.ElapsedSeconds()));
   }
   return vocabulary;
 }
