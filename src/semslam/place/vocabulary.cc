@@ -56,6 +56,9 @@ Vocabulary Vocabulary::FromTree(int branching, int depth, BowWeighting weighting
   v.parent_ = std::move(parent);
   v.descriptors_ = std::move(descriptors);
   v.word_weight_ = std::move(leaf_weights);
+  // Weights are kept at float precision: what Save() stores, so that a loaded vocabulary equals the saved
+  // one.
+  for (double& w : v.word_weight_) w = static_cast<double>(static_cast<float>(w));
   v.BuildIndex();
   return v;
 }
@@ -178,9 +181,13 @@ void Vocabulary::Save(const std::filesystem::path& path) const {
   writer.Put<std::uint32_t>(static_cast<std::uint32_t>(depth_));
   writer.Put<std::uint32_t>(static_cast<std::uint32_t>(weighting_));
   writer.Put<std::uint32_t>(static_cast<std::uint32_t>(pattern_));
-  writer.PutVector(parent_);
+  // The tree as child counts in breadth-first order (parents follow from them), then the node descriptors,
+  // then the word weights (float).
+  std::vector<std::uint16_t> children(num_children_.begin(), num_children_.end());
+  writer.PutVector(children);
   writer.PutVector(descriptors_);
-  writer.PutVector(word_weight_);
+  std::vector<float> weights(word_weight_.begin(), word_weight_.end());
+  writer.PutVector(weights);
   WriteChecksummedFile(path, kMagic, kFormatVersion, writer.bytes());
 }
 
@@ -212,9 +219,24 @@ Vocabulary Vocabulary::Load(const std::filesystem::path& path) {
   if (depth < 1 || depth > kMaxDepth) reader.Fail(fmt::format("bad depth {}", depth));
   if (weighting > 3) reader.Fail(fmt::format("bad weighting {}", weighting));
   if (pattern > 1) reader.Fail(fmt::format("bad descriptor pattern {}", pattern));
-  auto parent = reader.GetVector<NodeId>();
+  const auto children = reader.GetVector<std::uint16_t>();
   auto descriptors = reader.GetVector<Descriptor>();
-  auto weights = reader.GetVector<double>();
+  const auto stored_weights = reader.GetVector<float>();
+  if (children.size() != descriptors.size()) reader.Fail("node counts of the tree and descriptors differ");
+  // Parents from the child counts: node i's children follow those of nodes 0..i-1.
+  std::vector<NodeId> parent(children.size(), 0);
+  size_t next = 1;
+  for (size_t i = 0; i < children.size(); ++i) {
+    if (children[i] > branching)
+      reader.Fail(fmt::format("node {} has {} children, more than k", i, children[i]));
+    if (i >= next && i > 0) reader.Fail(fmt::format("node {} is not reachable from the root", i));
+    for (size_t c = 0; c < children[i]; ++c, ++next) {
+      if (next >= parent.size()) reader.Fail("the tree has more children than nodes");
+      parent[next] = static_cast<NodeId>(i);
+    }
+  }
+  if (next != parent.size()) reader.Fail("the tree's child counts do not add up to its nodes");
+  std::vector<double> weights(stored_weights.begin(), stored_weights.end());
   if (!reader.AtEnd()) reader.Fail("trailing bytes after the vocabulary");
   try {
     return FromTree(static_cast<int>(branching), static_cast<int>(depth),

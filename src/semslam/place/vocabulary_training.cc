@@ -282,8 +282,9 @@ Vocabulary Vocabulary::Train(const std::vector<std::vector<Descriptor>>& images,
     }
     const double n = static_cast<double>(images.size());
     for (size_t w = 0; w < num_leaves; ++w) {
-      vocabulary.word_weight_[w] =
-          std::log(n / static_cast<double>(std::max<std::uint32_t>(documents[w], 1)));
+      // At float precision, as stored (see FromTree).
+      const double idf = std::log(n / static_cast<double>(std::max<std::uint32_t>(documents[w], 1)));
+      vocabulary.word_weight_[w] = static_cast<double>(static_cast<float>(idf));
     }
   }
   if (progress) {
