@@ -226,6 +226,20 @@ TEST(OrbExtractor, MaskExcludesPixelsAndTheCountIsKept) {
   EXPECT_THROW(extractor.Extract(cv::Mat()), InvalidArgument);
 }
 
+TEST(OrbExtractor, TinyAndBlankImages) {
+  const OrbExtractor extractor;
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(20, 20), cv::Size(33, 100), cv::Size(300, 40)}) {
+    const cv::Mat image = MakeSyntheticTrainingImage(2, size);
+    const FeatureSet f = extractor.Extract(image);
+    EXPECT_EQ(f.keypoints.size(), f.descriptors.size());
+    for (const auto& kp : f.keypoints) {
+      EXPECT_GE(kp.pixel.x(), 15.0f);
+      EXPECT_LE(kp.pixel.x(), static_cast<float>(size.width) - 16.0f);
+    }
+  }
+  EXPECT_EQ(extractor.Extract(cv::Mat(376, 1241, CV_8UC1, cv::Scalar(128))).size(), 0u);
+}
+
 TEST(OrbExtractor, ColourInputAndPyramidOutput) {
   const cv::Mat grey = SyntheticStreetSizedImage(9);
   cv::Mat colour;
