@@ -31,6 +31,7 @@ void PrintSummary(const Vocabulary& vocabulary, const std::filesystem::path& pat
 
 struct TrainArgs {
   std::vector<std::string> image_dirs;
+  size_t procedural = 0;
   std::string out;
   int k = 10;
   int levels = 4;
@@ -43,17 +44,28 @@ struct TrainArgs {
 
 void Train(const TrainArgs& args) {
   Stopwatch watch;
-  std::vector<std::filesystem::path> folders(args.image_dirs.begin(), args.image_dirs.end());
-  const auto images = ListTrainingImages(folders, args.max_images);
-  std::fprintf(stderr, "vocab train: %zu images, %d features each\n", images.size(), args.features);
+  if (args.image_dirs.empty() == (args.procedural == 0)) {
+    throw InvalidArgument("vocab train: give either --images or --procedural");
+  }
   OrbOptions orb;
   orb.num_features = args.features;
   orb.pattern = args.opencv_pattern ? OrbDescriptorPattern::kOpenCv : OrbDescriptorPattern::kSemslam;
   orb.Check();
-  ProgressReporter progress("extracting features", images.size());
-  const auto descriptors =
-      ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
-  progress.Finish();
+  std::vector<std::vector<Descriptor>> descriptors;
+  if (args.procedural > 0) {
+    std::fprintf(stderr, "vocab train: %zu procedural images, %d features each\n", args.procedural, args.features);
+    ProgressReporter progress("extracting features", args.procedural);
+    descriptors = ExtractProceduralDescriptors(args.procedural, cv::Size(1241, 376), orb, args.seed,
+                                               [&](size_t done, size_t) { progress.Update(done); });
+    progress.Finish();
+  } else {
+    std::vector<std::filesystem::path> folders(args.image_dirs.begin(), args.image_dirs.end());
+    const auto images = ListTrainingImages(folders, args.max_images);
+    std::fprintf(stderr, "vocab train: %zu images, %d features each\n", images.size(), args.features);
+    ProgressReporter progress("extracting features", images.size());
+    descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+    progress.Finish();
+  }
   VocabularyTrainingOptions options;
   options.branching = args.k;
   options.depth = args.levels;
@@ -134,8 +146,9 @@ void AddVocabCommand(CLI::App& app) {
   train
       ->add_option("--images", args->image_dirs,
                    "Image folders (or KITTI-layout datasets: DIR/image_0, DIR/sequences/*/image_0)")
-      ->required()
       ->expected(1, -1);
+  train->add_option("--procedural", args->procedural,
+                    "Instead of --images: this many procedurally drawn 1241x376 images (no data needed)");
   train->add_option("--out", args->out, "Vocabulary file to write")->required();
   train->add_option("--k", args->k, "Branching factor")->capture_default_str()->check(CLI::Range(2, 256));
   train->add_option("--levels", args->levels, "Depth of the tree (levels below the root)")

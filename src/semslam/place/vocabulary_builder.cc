@@ -11,6 +11,7 @@
 #include <set>
 
 #include "semslam/core/error.h"
+#include "semslam/features/orb_pattern.h"
 
 namespace semslam {
 namespace {
@@ -102,6 +103,26 @@ std::vector<std::vector<Descriptor>> ExtractTrainingDescriptors(
     if (progress) progress(done.load(), images.size());
   }
   if (!error_file.empty()) throw InputError(error_file, "cannot read this image");
+  return descriptors;
+}
+
+std::vector<std::vector<Descriptor>> ExtractProceduralDescriptors(size_t count, cv::Size size, const OrbOptions& orb,
+                                                                  std::uint64_t first_seed,
+                                                                  const std::function<void(size_t, size_t)>& progress) {
+  OrbOptions options = orb;
+  options.parallel = false;
+  const OrbExtractor extractor(options);
+  std::vector<std::vector<Descriptor>> descriptors(count);
+  constexpr size_t kBatch = 32;
+  for (size_t begin = 0; begin < count; begin += kBatch) {
+    const size_t end = std::min(count, begin + kBatch);
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 1), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        descriptors[i] = extractor.Extract(MakeSyntheticTrainingImage(first_seed + i, size)).descriptors;
+      }
+    });
+    if (progress) progress(end, count);
+  }
   return descriptors;
 }
 

@@ -25,4 +25,10 @@ std::vector<std::vector<Descriptor>> ExtractTrainingDescriptors(
     const std::vector<std::filesystem::path>& images, const OrbOptions& orb,
     const std::function<void(size_t, size_t)>& progress = {});
 
+// Descriptors of `count` procedurally drawn images (MakeSyntheticTrainingImage, seeds first_seed...) of the
+// given size: a vocabulary that needs no data at all.
+std::vector<std::vector<Descriptor>> ExtractProceduralDescriptors(
+    size_t count, cv::Size size, const OrbOptions& orb, std::uint64_t first_seed = 1,
+    const std::function<void(size_t, size_t)>& progress = {});
+
 }  // namespace semslam
