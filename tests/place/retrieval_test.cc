@@ -165,3 +165,32 @@ TEST(BowMatching, MatchesAShiftedImageThroughTheDirectIndex) {
 
 }  // namespace
 }  // namespace semslam
+
+namespace semslam {
+namespace {
+
+TEST(DefaultVocabulary, IsInTheTreeLoadsAndRecognizesPlaces) {
+  ::unsetenv("SEMSLAM_VOCABULARY");
+  const auto path = DefaultVocabularyPath();
+  ASSERT_TRUE(std::filesystem::exists(path)) << path << " (made by scripts/make-vocabulary.sh)";
+  const Vocabulary vocabulary = Vocabulary::Load(path);
+  EXPECT_EQ(vocabulary.descriptor_pattern(), OrbDescriptorPattern::kSemslam);
+  EXPECT_GT(vocabulary.size(), 5000u);
+  EXPECT_LT(std::filesystem::file_size(path), 1600000u);
+  const OrbExtractor extractor;
+  KeyFrameDatabase db(vocabulary.size());
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < 20; ++i) {
+    images.push_back(MakeSyntheticTrainingImage(9000 + i, cv::Size(1241, 376)));
+    db.Add(static_cast<std::uint64_t>(i), vocabulary.Transform(extractor.Extract(images.back()).descriptors));
+  }
+  for (int i = 0; i < 20; ++i) {
+    const auto results = db.Query(
+        vocabulary.Transform(extractor.Extract(Perturb(images[static_cast<size_t>(i)], i)).descriptors));
+    ASSERT_FALSE(results.empty());
+    EXPECT_EQ(results[0].id, static_cast<std::uint64_t>(i));
+  }
+}
+
+}  // namespace
+}  // namespace semslam
