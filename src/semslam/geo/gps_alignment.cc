@@ -1,0 +1,221 @@
+#include "semslam/geo/gps_alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "semslam/core/error.h"
+#include "semslam/geometry/alignment.h"
+
+namespace semslam {
+
+void GpsSamplingOptions::Check() const {
+  Require(every_n_frames >= 1, "GPS every_n_frames must be at least 1");
+  Require(std::isfinite(match_tolerance_s) && match_tolerance_s >= 0, "GPS match_tolerance_s must be >= 0");
+  Require(std::isfinite(time_offset_s), "GPS time_offset_s must be finite");
+}
+
+void GpsAlignmentOptions::Check() const {
+  Require(min_samples >= 3, "GPS alignment min_samples must be at least 3");
+  Require(ransac_iterations >= 0, "GPS alignment ransac_iterations must be >= 0");
+  Require(std::isfinite(inlier_threshold_m) && inlier_threshold_m > 0, "GPS inlier_threshold_m must be positive");
+  Require(std::isfinite(inlier_sigma_factor) && inlier_sigma_factor >= 0, "GPS inlier_sigma_factor must be >= 0");
+  Require(std::isfinite(inlier_mad_factor) && inlier_mad_factor >= 0, "GPS inlier_mad_factor must be >= 0");
+  Require(irls_iterations >= 0, "GPS irls_iterations must be >= 0");
+  Require(std::isfinite(cauchy_scale) && cauchy_scale > 0, "GPS cauchy_scale must be positive");
+  Require(min_triangle_sine >= 0 && min_triangle_sine < 1, "GPS min_triangle_sine must be in [0, 1)");
+}
+
+namespace {
+
+GpsSample MakeSample(const FramePosition& frame, const std::vector<GpsFix>& fixes, size_t fix_index,
+                     const EnuFrame& enu_frame) {
+  GpsSample sample;
+  sample.frame_index = frame.frame_index;
+  sample.timestamp = frame.timestamp;
+  sample.map_position = frame.map_position;
+  sample.enu = enu_frame.ToEnu(fixes[fix_index].position);
+  sample.sigma_m = fixes[fix_index].sigma_m;
+  sample.fix_index = fix_index;
+  return sample;
+}
+
+std::optional<Sim3d> Fit(const Points3d& src, const Points3d& tgt, const std::vector<double>& weights,
+                         bool estimate_scale) {
+  if (estimate_scale) return AlignSim3(src, tgt, weights);
+  const auto rigid = AlignRigid3(src, tgt, weights);
+  if (!rigid) return std::nullopt;
+  return Sim3d(*rigid);
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
+  return values[mid];
+}
+
+// Smallest sine of the triangle's angles (0 for degenerate triangles).
+double TriangleSine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, bc = c - b;
+  const double area2 = ab.cross(ac).norm();
+  const double lab = ab.norm(), lac = ac.norm(), lbc = bc.norm();
+  const double longest = std::max({lab, lac, lbc});
+  if (longest <= 0) return 0.0;
+  // sin(angle) = 2*area / (product of the two adjacent sides); the smallest angle is opposite the shortest side,
+  // between the two longer ones.
+  const double shortest = std::min({lab, lac, lbc});
+  const double middle = lab + lac + lbc - longest - shortest;
+  return middle > 0 ? area2 / (longest * middle) : 0.0;
+}
+
+}  // namespace
+
+std::vector<GpsSample> SampleGpsPairs(const std::vector<FramePosition>& frames, const std::vector<GpsFix>& fixes,
+                                      const EnuFrame& enu_frame, const GpsSamplingOptions& options) {
+  GpsSampler sampler(fixes, enu_frame, options);
+  std::vector<GpsSample> samples;
+  for (const FramePosition& frame : frames) {
+    if (auto sample = sampler.AddFrame(frame)) samples.push_back(*sample);
+  }
+  return samples;
+}
+
+GpsSampler::GpsSampler(std::vector<GpsFix> fixes, EnuFrame enu_frame, GpsSamplingOptions options)
+    : fixes_(std::move(fixes)), enu_frame_(std::move(enu_frame)), options_(options) {
+  options_.Check();
+}
+
+std::optional<GpsSample> GpsSampler::AddFrame(const FramePosition& frame) {
+  if (next_frame_ && frame.frame_index < *next_frame_) return std::nullopt;
+  if (!frame.map_position.allFinite()) return std::nullopt;
+  const auto match = MatchFixesToTimes(fixes_, {frame.timestamp}, options_.match_tolerance_s,
+                                       options_.time_offset_s)[0];
+  if (!match) return std::nullopt;  // no fix here (dropout): try the next frame
+  // The next sample at the next multiple of N after this frame's slot.
+  const size_t n = static_cast<size_t>(options_.every_n_frames);
+  next_frame_ = (frame.frame_index / n + 1) * n;
+  return MakeSample(frame, fixes_, *match, enu_frame_);
+}
+
+GpsAlignment EvaluateAlignment(const Sim3d& enu_from_map, const std::vector<GpsSample>& samples,
+                               const GpsAlignmentOptions& options) {
+  GpsAlignment result;
+  result.enu_from_map = enu_from_map;
+  result.residuals_m.resize(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    result.residuals_m[i] = (samples[i].enu - enu_from_map * samples[i].map_position).norm();
+  }
+  const double spread = options.inlier_mad_factor * Median(result.residuals_m);
+  result.inliers.resize(samples.size());
+  double inlier_sum = 0.0, all_sum = 0.0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const double threshold =
+        std::max({options.inlier_threshold_m, options.inlier_sigma_factor * samples[i].sigma_m, spread});
+    const double r = result.residuals_m[i];
+    result.inliers[i] = r < threshold;
+    all_sum += r * r;
+    if (result.inliers[i]) {
+      ++result.num_inliers;
+      inlier_sum += r * r;
+    }
+  }
+  if (!samples.empty()) result.rmse_m = std::sqrt(all_sum / static_cast<double>(samples.size()));
+  if (result.num_inliers > 0) result.inlier_rmse_m = std::sqrt(inlier_sum / result.num_inliers);
+  return result;
+}
+
+std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
+                                          const GpsAlignmentOptions& options) {
+  options.Check();
+  const size_t n = samples.size();
+  if (n < static_cast<size_t>(options.min_samples)) return std::nullopt;
+  Points3d src(n), tgt(n);
+  std::vector<double> base_weight(n);
+  for (size_t i = 0; i < n; ++i) {
+    src[i] = samples[i].map_position;
+    tgt[i] = samples[i].enu;
+    base_weight[i] = 1.0 / (samples[i].sigma_m * samples[i].sigma_m);
+  }
+
+  // RANSAC (MSAC scoring) over minimal triples.
+  std::optional<Sim3d> best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  if (options.ransac_iterations > 0) {
+    std::mt19937_64 rng(options.seed);
+    std::uniform_int_distribution<size_t> pick(0, n - 1);
+    for (int iteration = 0; iteration < options.ransac_iterations; ++iteration) {
+      const size_t a = pick(rng), b = pick(rng), c = pick(rng);
+      if (a == b || a == c || b == c) continue;
+      if (TriangleSine(src[a], src[b], src[c]) < options.min_triangle_sine ||
+          TriangleSine(tgt[a], tgt[b], tgt[c]) < options.min_triangle_sine) {
+        continue;
+      }
+      const auto model = Fit({src[a], src[b], src[c]}, {tgt[a], tgt[b], tgt[c]}, {}, options.estimate_scale);
+      if (!model) continue;
+      double cost = 0.0;
+      for (size_t i = 0; i < n; ++i) {
+        const double threshold = std::max(options.inlier_threshold_m, options.inlier_sigma_factor * samples[i].sigma_m);
+        cost += std::min((tgt[i] - *model * src[i]).squaredNorm(), threshold * threshold);
+      }
+      if (cost < best_cost) {
+        best_cost = cost;
+        best = model;
+      }
+    }
+  }
+  if (!best) best = Fit(src, tgt, base_weight, options.estimate_scale);
+  if (!best) return std::nullopt;
+
+  // Refit on the inliers, then reweight (Cauchy) and re-select until the inlier set settles.
+  GpsAlignment current = EvaluateAlignment(*best, samples, options);
+  for (int iteration = 0; iteration <= options.irls_iterations; ++iteration) {
+    std::vector<double> weights(n, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      if (!current.inliers[i]) continue;
+      const double u = current.residuals_m[i] / (options.cauchy_scale * samples[i].sigma_m);
+      weights[i] = base_weight[i] * (iteration == 0 ? 1.0 : 1.0 / (1.0 + u * u));
+    }
+    const auto refit = Fit(src, tgt, weights, options.estimate_scale);
+    if (!refit) break;
+    GpsAlignment next = EvaluateAlignment(*refit, samples, options);
+    const bool settled = next.inliers == current.inliers &&
+                         (next.enu_from_map.translation - current.enu_from_map.translation).norm() < 1e-6 &&
+                         std::abs(next.enu_from_map.scale / current.enu_from_map.scale - 1.0) < 1e-9;
+    current = std::move(next);
+    if (settled && iteration > 0) break;
+  }
+  if (current.num_inliers < 3) return std::nullopt;
+  return current;
+}
+
+IncrementalGpsAligner::IncrementalGpsAligner(GpsAlignmentOptions options) : options_(options) { options_.Check(); }
+
+const std::optional<GpsAlignment>& IncrementalGpsAligner::Add(const GpsSample& sample) {
+  samples_.push_back(sample);
+  Reestimate();
+  return current_;
+}
+
+const std::optional<GpsAlignment>& IncrementalGpsAligner::UpdateMapPositions(
+    const std::function<std::optional<Eigen::Vector3d>(size_t frame_index)>& position_of) {
+  for (GpsSample& sample : samples_) {
+    if (const auto position = position_of(sample.frame_index)) sample.map_position = *position;
+  }
+  Reestimate();
+  return current_;
+}
+
+void IncrementalGpsAligner::Reestimate() {
+  auto estimate = AlignMapToGps(samples_, options_);
+  if (estimate) {
+    current_ = std::move(estimate);
+  } else if (current_) {
+    // Degenerate for now (cannot happen by adding samples to a good set, but moved positions can): keep the
+    // last transform, with residuals for every sample.
+    current_ = EvaluateAlignment(current_->enu_from_map, samples_, options_);
+  }
+}
+
+}  // namespace semslam

@@ -1,1 +1,0 @@
-// Placeholder until the landmarks module has sources.

@@ -1,1 +1,0 @@
-// Placeholder until the topology module has sources.
