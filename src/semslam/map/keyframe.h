@@ -1,0 +1,141 @@
+#pragma once
+// A keyframe: a frame kept in the map, with its features, pose, map point associations, place in the
+// covisibility graph and spanning tree, bag-of-words vectors, and links for semantics and GPS.
+//
+// Thread safety: as for MapPoint, guarded by the owning Map's mutex; "scratch" fields belong to one thread.
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <vector>
+
+#include "semslam/features/orb_types.h"
+#include "semslam/geometry/camera.h"
+#include "semslam/geometry/rigid3.h"
+#include "semslam/map/frame.h"
+
+namespace semslam {
+
+class MapPoint;
+
+class KeyFrame {
+ public:
+  // Copies the frame's features, stereo data, bag of words and pose (the frame must have a pose).
+  KeyFrame(std::uint64_t id, const Frame& frame);
+
+  std::uint64_t id() const { return id_; }
+  std::uint64_t frame_id() const { return frame_id_; }
+  double timestamp() const { return timestamp_; }
+
+  // The frame data: features (undistorted pixel coordinates), stereo, grid, bag of words.
+  const FrameData& data() const { return *data_; }
+  const FeatureSet& features() const { return data_->features; }
+  const PinholeCamera& camera() const { return data_->camera; }
+  size_t num_features() const { return data_->features.size(); }
+
+  const Rigid3d& camera_from_world() const { return camera_from_world_; }
+  const Rigid3d& world_from_camera() const { return world_from_camera_; }
+  Eigen::Vector3d center() const { return world_from_camera_.translation; }
+  void SetPose(const Rigid3d& camera_from_world);
+
+  // Map point associations, one slot per keypoint (nullptr = none).
+  const std::vector<MapPoint*>& map_points() const { return map_points_; }
+  MapPoint* map_point(int index) const { return map_points_[static_cast<size_t>(index)]; }
+  void SetMapPoint(int index, MapPoint* point) { map_points_[static_cast<size_t>(index)] = point; }
+  void EraseMapPoint(const MapPoint* point);
+  // Good (not bad) points observed by at least `min_observations` cameras.
+  int CountTrackedPoints(int min_observations) const;
+  std::set<MapPoint*> GoodMapPoints() const;
+
+  // Covisibility graph: keyframes sharing at least 15 points (or the best one) with their weights.
+  void UpdateConnections();
+  void AddConnection(KeyFrame* other, int weight);
+  void EraseConnection(KeyFrame* other);
+  std::vector<KeyFrame*> BestCovisibles(size_t n) const;
+  std::vector<KeyFrame*> CovisiblesWithWeightAtLeast(int weight) const;
+  const std::vector<KeyFrame*>& Covisibles() const { return ordered_connections_; }
+  int ConnectionWeight(KeyFrame* other) const;
+
+  // Spanning tree (the strongest covisibility link to an older keyframe) and loop edges.
+  KeyFrame* parent() const { return parent_; }
+  const std::set<KeyFrame*>& children() const { return children_; }
+  void ChangeParent(KeyFrame* parent);
+  void AddLoopEdge(KeyFrame* other);
+  const std::set<KeyFrame*>& loop_edges() const { return loop_edges_; }
+
+  // Culling. A keyframe protected by the loop closer is erased only when released.
+  bool is_bad() const { return bad_; }
+  void SetNotErase() { not_erase_ = true; }
+  void SetErase();
+  // Disconnects the keyframe from the graph and its points, re-parents its children. The first keyframe
+  // is never erased.
+  void SetBad();
+  // Marks the keyframe bad without touching the graph (the whole map is being reset).
+  void MarkBadForReset() { bad_ = true; }
+  // Pose relative to the parent, kept when the keyframe is erased so trajectories can still be recovered.
+  const Rigid3d& camera_from_parent() const { return camera_from_parent_; }
+
+  // Median depth of the observed points (for monocular scale and baselines); `q` = 2 gives the median.
+  double SceneDepthQuantile(int q = 2) const;
+  // Whether a world point projects inside the image with positive depth.
+  bool IsInImage(const Eigen::Vector3d& world_point) const;
+  // World position of a keypoint with stereo depth, if any.
+  std::optional<Eigen::Vector3d> UnprojectStereo(int index) const;
+
+  // Bag of words (computed by the mapping thread when the frame did not have it yet).
+  bool has_bow = false;
+  BowVector bow;
+  FeatureVector feature_vector;
+
+  // Semantics: per-keypoint class log-probabilities sampled from this keyframe's segmentation (19 per
+  // keypoint, row-major), empty until the keyframe has been segmented.
+  std::vector<float> keypoint_label_log_probabilities;
+
+  // GPS: the fix matched to this keyframe, in the ENU frame (metres), when there is one.
+  std::optional<Eigen::Vector3d> gps_enu;
+  double gps_sigma_m = 0.0;
+
+  // Scratch (mapping thread).
+  std::uint64_t local_ba_keyframe = UINT64_MAX;
+  std::uint64_t fixed_ba_keyframe = UINT64_MAX;
+  std::uint64_t fuse_target_keyframe = UINT64_MAX;
+  // Scratch (tracking thread).
+  std::uint64_t tracking_local_frame = UINT64_MAX;
+  std::uint64_t relocalization_query_frame = UINT64_MAX;
+  // Scratch (loop thread and its global BA).
+  std::uint64_t loop_query_keyframe = UINT64_MAX;
+  int loop_words = 0;
+  float loop_score = 0.0f;
+  std::uint64_t global_ba_keyframe = UINT64_MAX;
+  Rigid3d global_ba_pose;
+  Rigid3d global_ba_pose_before;
+
+ private:
+  friend class MapSerializer;
+  void UpdateBestCovisibles();
+
+  const std::uint64_t id_;
+  const std::uint64_t frame_id_;
+  const double timestamp_;
+  std::shared_ptr<const FrameData> data_;
+  Rigid3d camera_from_world_;
+  Rigid3d world_from_camera_;
+  std::vector<MapPoint*> map_points_;
+
+  std::map<KeyFrame*, int> connection_weights_;
+  std::vector<KeyFrame*> ordered_connections_;
+  std::vector<int> ordered_weights_;
+  bool first_connection_ = true;
+  KeyFrame* parent_ = nullptr;
+  std::set<KeyFrame*> children_;
+  std::set<KeyFrame*> loop_edges_;
+
+  bool bad_ = false;
+  bool not_erase_ = false;
+  bool to_be_erased_ = false;
+  Rigid3d camera_from_parent_;
+};
+
+}  // namespace semslam

@@ -1,0 +1,281 @@
+#include "semslam/map/map_file.h"
+
+#include <fmt/format.h>
+
+#include <unordered_map>
+
+#include "semslam/core/binary_io.h"
+
+namespace semslam {
+
+// Friend of KeyFrame and MapPoint: the only code that builds them from stored state.
+class MapSerializer {
+ public:
+  static void WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf);
+  static std::unique_ptr<KeyFrame> ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
+                                                std::vector<std::uint64_t>* loop_ids);
+  static void WritePoint(BinaryWriter& w, const MapPoint& p);
+  static void ReadPoint(BinaryReader& r, Map& map, const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes);
+  static void SetParent(KeyFrame* kf, KeyFrame* parent) { kf->ChangeParent(parent); kf->first_connection_ = false; }
+  static void AddLoopEdge(KeyFrame* kf, KeyFrame* other) { kf->AddLoopEdge(other); }
+};
+
+namespace {
+
+constexpr std::string_view kMagic("SEMSLMAP", 8);
+constexpr std::uint64_t kNone = UINT64_MAX;
+
+void WriteRigid(BinaryWriter& w, const Rigid3d& t) {
+  w.Put(t.rotation.w());
+  w.Put(t.rotation.x());
+  w.Put(t.rotation.y());
+  w.Put(t.rotation.z());
+  w.Put(t.translation.x());
+  w.Put(t.translation.y());
+  w.Put(t.translation.z());
+}
+
+Rigid3d ReadRigid(BinaryReader& r) {
+  const double qw = r.Get<double>(), qx = r.Get<double>(), qy = r.Get<double>(), qz = r.Get<double>();
+  const double x = r.Get<double>(), y = r.Get<double>(), z = r.Get<double>();
+  const Eigen::Quaterniond q(qw, qx, qy, qz);
+  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-6 || !std::isfinite(x + y + z)) {
+    r.Fail("invalid pose");
+  }
+  return Rigid3d(q, Eigen::Vector3d(x, y, z));
+}
+
+void WriteCamera(BinaryWriter& w, const PinholeCamera& c) {
+  w.Put<std::int32_t>(c.width);
+  w.Put<std::int32_t>(c.height);
+  for (double v : {c.fx, c.fy, c.cx, c.cy}) w.Put(v);
+}
+
+PinholeCamera ReadCamera(BinaryReader& r) {
+  PinholeCamera c;
+  c.width = r.Get<std::int32_t>();
+  c.height = r.Get<std::int32_t>();
+  c.fx = r.Get<double>();
+  c.fy = r.Get<double>();
+  c.cx = r.Get<double>();
+  c.cy = r.Get<double>();
+  try {
+    c.Check();
+  } catch (const InvalidArgument& e) {
+    r.Fail(e.what());
+  }
+  return c;
+}
+
+}  // namespace
+
+void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
+  const FrameData& d = kf.data();
+  w.Put<std::uint64_t>(kf.id());
+  w.Put<std::uint64_t>(kf.frame_id());
+  w.Put<double>(kf.timestamp());
+  WriteRigid(w, kf.camera_from_world());
+  WriteCamera(w, d.camera);
+  w.Put<double>(d.stereo ? d.stereo->baseline : 0.0);
+  w.Put<std::int32_t>(d.features.pyramid.num_levels);
+  w.Put<float>(d.features.pyramid.scale_factor);
+  w.Put<std::int32_t>(d.features.image_width);
+  w.Put<std::int32_t>(d.features.image_height);
+  w.PutVector(d.features.keypoints);
+  w.PutVector(d.features.descriptors);
+  w.PutVector(d.right_u);
+  w.PutVector(d.depth);
+  w.Put<std::uint64_t>(kf.parent() ? kf.parent()->id() : kNone);
+  std::vector<std::uint64_t> loops;
+  for (const KeyFrame* other : kf.loop_edges()) loops.push_back(other->id());
+  w.PutVector(loops);
+  w.Put<std::uint8_t>(kf.gps_enu.has_value());
+  const Eigen::Vector3d gps = kf.gps_enu.value_or(Eigen::Vector3d::Zero());
+  w.Put(gps.x());
+  w.Put(gps.y());
+  w.Put(gps.z());
+  w.Put(kf.gps_sigma_m);
+  w.PutVector(kf.keypoint_label_log_probabilities);
+}
+
+std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
+                                                      std::vector<std::uint64_t>* loop_ids) {
+  const auto id = r.Get<std::uint64_t>();
+  r.set_context(fmt::format("keyframe {}", id));
+  const auto frame_id = r.Get<std::uint64_t>();
+  const double timestamp = r.Get<double>();
+  const Rigid3d camera_from_world = ReadRigid(r);
+  const PinholeCamera camera = ReadCamera(r);
+  const double baseline = r.Get<double>();
+  std::optional<StereoRig> stereo;
+  if (baseline > 0) stereo = StereoRig{camera, baseline};
+  FeatureSet features;
+  const int levels = r.Get<std::int32_t>();
+  const float scale_factor = r.Get<float>();
+  if (levels < 1 || levels > 32 || !(scale_factor > 1.0f && scale_factor < 4.0f)) r.Fail("invalid pyramid");
+  features.pyramid = PyramidGeometry::Make(levels, scale_factor);
+  features.image_width = r.Get<std::int32_t>();
+  features.image_height = r.Get<std::int32_t>();
+  features.keypoints = r.GetVector<Keypoint>();
+  features.descriptors = r.GetVector<Descriptor>();
+  auto right_u = r.GetVector<float>();
+  auto depth = r.GetVector<float>();
+  const size_t n = features.keypoints.size();
+  if (features.descriptors.size() != n || (!right_u.empty() && right_u.size() != n) ||
+      (!depth.empty() && depth.size() != n)) {
+    r.Fail("feature arrays of different lengths");
+  }
+  for (const auto& kp : features.keypoints) {
+    if (kp.level < 0 || kp.level >= levels || !kp.pixel.allFinite()) r.Fail("invalid keypoint");
+  }
+  *parent_id = r.Get<std::uint64_t>();
+  *loop_ids = r.GetVector<std::uint64_t>();
+  const bool has_gps = r.Get<std::uint8_t>() != 0;
+  Eigen::Vector3d gps;
+  gps.x() = r.Get<double>();
+  gps.y() = r.Get<double>();
+  gps.z() = r.Get<double>();
+  const double gps_sigma = r.Get<double>();
+  auto labels = r.GetVector<float>();
+
+  Frame frame(frame_id, timestamp,
+              MakeFrameData(camera, stereo, std::move(features), std::move(right_u), std::move(depth)));
+  frame.SetPose(camera_from_world);
+  auto kf = std::make_unique<KeyFrame>(id, frame);
+  if (has_gps) kf->gps_enu = gps;
+  kf->gps_sigma_m = gps_sigma;
+  kf->keypoint_label_log_probabilities = std::move(labels);
+  return kf;
+}
+
+void MapSerializer::WritePoint(BinaryWriter& w, const MapPoint& p) {
+  w.Put<std::uint64_t>(p.id());
+  w.Put<std::uint64_t>(p.reference_keyframe() ? p.reference_keyframe()->id() : kNone);
+  w.Put(p.position().x());
+  w.Put(p.position().y());
+  w.Put(p.position().z());
+  w.Put<std::int32_t>(p.visible());
+  w.Put<std::int32_t>(p.found());
+  w.PutVector(p.label_log_probabilities());
+  w.Put<std::int32_t>(p.label_observations);
+  std::vector<std::uint64_t> observations;
+  for (const auto& [kf, index] : p.observations()) {
+    observations.push_back(kf->id());
+    observations.push_back(static_cast<std::uint64_t>(index));
+  }
+  w.PutVector(observations);
+}
+
+void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
+                              const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes) {
+  const auto id = r.Get<std::uint64_t>();
+  r.set_context(fmt::format("map point {}", id));
+  const auto reference_id = r.Get<std::uint64_t>();
+  Eigen::Vector3d position;
+  position.x() = r.Get<double>();
+  position.y() = r.Get<double>();
+  position.z() = r.Get<double>();
+  if (!position.allFinite()) r.Fail("position is not finite");
+  const int visible = r.Get<std::int32_t>();
+  const int found = r.Get<std::int32_t>();
+  auto labels = r.GetVector<float>();
+  const int label_observations = r.Get<std::int32_t>();
+  const auto observations = r.GetVector<std::uint64_t>();
+  if (observations.size() % 2 != 0) r.Fail("odd observation list");
+
+  const auto ref = keyframes.find(reference_id);
+  if (ref == keyframes.end()) r.Fail(fmt::format("reference keyframe {} does not exist", reference_id));
+  auto point = std::make_unique<MapPoint>(id, position, ref->second);
+  point->visible_ = visible;
+  point->found_ = found;
+  point->label_log_probabilities_ = std::move(labels);
+  point->label_observations = label_observations;
+  MapPoint* p = map.RestoreMapPoint(std::move(point));
+  for (size_t i = 0; i < observations.size(); i += 2) {
+    const auto kf = keyframes.find(observations[i]);
+    if (kf == keyframes.end()) r.Fail(fmt::format("observing keyframe {} does not exist", observations[i]));
+    const auto index = observations[i + 1];
+    if (index >= kf->second->num_features()) r.Fail("observation index out of range");
+    kf->second->SetMapPoint(static_cast<int>(index), p);
+    p->AddObservation(kf->second, static_cast<int>(index));
+  }
+  if (p->observations().empty()) r.Fail("point without observations");
+  p->first_keyframe_id_ = p->observations().begin()->first->id();
+}
+
+void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFileContents& extra) {
+  BinaryWriter w;
+  const auto keyframes = map.KeyFrames();
+  const auto points = map.MapPoints();
+  w.Put<std::uint64_t>(keyframes.size());
+  for (const KeyFrame* kf : keyframes) MapSerializer::WriteKeyFrame(w, *kf);
+  std::uint64_t good_points = 0;
+  for (const MapPoint* p : points) good_points += !p->is_bad() && !p->observations().empty();
+  w.Put<std::uint64_t>(good_points);
+  for (const MapPoint* p : points) {
+    if (!p->is_bad() && !p->observations().empty()) MapSerializer::WritePoint(w, *p);
+  }
+  w.Put<std::uint64_t>(extra.extra_sections.size());
+  for (const auto& [name, bytes] : extra.extra_sections) {
+    w.PutString(name);
+    w.PutString(bytes);
+  }
+  WriteChecksummedFile(path, kMagic, kMapFileVersion, w.bytes());
+}
+
+MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
+  const ChecksummedFile file = ReadChecksummedFile(path, kMagic);
+  if (file.version != kMapFileVersion) {
+    throw InputError(path, fmt::format("map file version {} is not supported (this build reads {})", file.version,
+                                       kMapFileVersion));
+  }
+  Require(map.NumKeyFrames() == 0, "ReadMapFile needs an empty map");
+  BinaryReader r(file.payload, path);
+  const auto num_keyframes = r.Get<std::uint64_t>();
+  std::unordered_map<std::uint64_t, KeyFrame*> by_id;
+  std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;
+  for (std::uint64_t i = 0; i < num_keyframes; ++i) {
+    std::uint64_t parent = kNone;
+    std::vector<std::uint64_t> loops;
+    auto kf = MapSerializer::ReadKeyFrame(r, &parent, &loops);
+    if (by_id.count(kf->id())) r.Fail(fmt::format("duplicate keyframe id {}", kf->id()));
+    KeyFrame* k = map.RestoreKeyFrame(std::move(kf));
+    by_id[k->id()] = k;
+    links.emplace_back(parent, std::move(loops));
+  }
+  const auto num_points = r.Get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < num_points; ++i) MapSerializer::ReadPoint(r, map, by_id);
+  MapFileContents contents;
+  r.set_context("extra sections");
+  const auto num_extra = r.Get<std::uint64_t>();
+  for (std::uint64_t i = 0; i < num_extra; ++i) {
+    std::string name = r.GetString();
+    contents.extra_sections[name] = r.GetString();
+  }
+  if (!r.AtEnd()) r.Fail("trailing bytes");
+
+  // Derived state: covisibility, spanning tree, loop edges, point normals and descriptors.
+  const auto keyframes = map.KeyFrames();
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    KeyFrame* kf = keyframes[i];
+    kf->UpdateConnections();
+    const auto& [parent, loops] = links[i];
+    if (parent != kNone) {
+      const auto it = by_id.find(parent);
+      if (it == by_id.end()) throw InputError(path, fmt::format("keyframe {}: parent {} missing", kf->id(), parent));
+      MapSerializer::SetParent(kf, it->second);
+    }
+    for (const auto loop : loops) {
+      const auto it = by_id.find(loop);
+      if (it == by_id.end()) throw InputError(path, fmt::format("keyframe {}: loop edge to missing {}", kf->id(), loop));
+      MapSerializer::AddLoopEdge(kf, it->second);
+    }
+  }
+  for (MapPoint* p : map.MapPoints()) {
+    p->UpdateNormalAndDepth();
+    p->UpdateDescriptor();
+  }
+  return contents;
+}
+
+}  // namespace semslam

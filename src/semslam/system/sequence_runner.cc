@@ -1,0 +1,131 @@
+#include "semslam/system/sequence_runner.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <charconv>
+#include <nlohmann/json.hpp>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/core/progress.h"
+#include "semslam/eval/trajectory_metrics.h"
+#include "semslam/io/sequence.h"
+#include "semslam/io/trajectory_io.h"
+
+namespace semslam {
+
+void RunOptions::Check() const {
+  Require(!sequence.empty(), "run: --sequence is required");
+  Require(!output.empty(), "run: --out is required");
+  Require(first_frame < end_frame, "run: the frame range is empty");
+  slam.Check();
+}
+
+void ParseFrameRange(const std::string& text, size_t* first, size_t* end) {
+  const size_t colon = text.find(':');
+  Require(colon != std::string::npos, fmt::format("frame range '{}' must look like A:B", text));
+  auto parse = [&](std::string_view part, size_t fallback) {
+    if (part.empty()) return fallback;
+    size_t value = 0;
+    const auto [ptr, ec] = std::from_chars(part.data(), part.data() + part.size(), value);
+    Require(ec == std::errc() && ptr == part.data() + part.size(),
+            fmt::format("frame range '{}': '{}' is not a frame number", text, part));
+    return value;
+  };
+  const std::string_view view(text);
+  *first = parse(view.substr(0, colon), 0);
+  *end = parse(view.substr(colon + 1), std::numeric_limits<size_t>::max());
+  Require(*first < *end, fmt::format("frame range '{}' is empty", text));
+}
+
+namespace {
+
+nlohmann::json TimingJson(const TimingRegistry& timing) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, s] : timing.SummarizeAll()) {
+    j[name] = {{"count", s.count},     {"median_ms", s.median_ms}, {"mean_ms", s.mean_ms},
+               {"p95_ms", s.p95_ms},   {"max_ms", s.max_ms},       {"total_ms", s.total_ms}};
+  }
+  return j;
+}
+
+}  // namespace
+
+RunSummary RunSequence(const RunOptions& options) {
+  options.Check();
+  Stopwatch watch;
+  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
+  const size_t first = options.first_frame;
+  const size_t end = std::min(options.end_frame, sequence->size());
+  if (first >= end) {
+    throw InvalidArgument(fmt::format("run: frames {}:{} are outside the sequence's {} frames", first, end,
+                                      sequence->size()));
+  }
+  const bool stereo = options.slam.mode == SensorMode::kStereo;
+  if (stereo && !sequence->stereo()) {
+    throw InputError(sequence->directory(), "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
+  }
+  std::filesystem::create_directories(options.output);
+  spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
+               sequence->directory().string(), first, end - 1, stereo ? "stereo" : "monocular",
+               sequence->camera().ToString());
+
+  SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
+  if (!options.map_in.empty()) slam.LoadMap(options.map_in);
+
+  ProgressReporter progress("run", end - first, options.show_progress);
+  for (size_t i = first; i < end; ++i) {
+    const cv::Mat left = sequence->LoadImage(i, 0);
+    const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
+    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
+    progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), slam.map().NumKeyFrames()));
+  }
+  slam.Finish();
+  const SlamStatistics stats = slam.Statistics();
+  progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked, stats.frames,
+                              stats.keyframes, stats.map_points, stats.loops));
+
+  const Trajectory trajectory = slam.FrameTrajectory();
+  WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
+  WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
+  WriteKittiPoses(options.output / "trajectory.kitti", trajectory);
+  if (options.save_map && !options.slam.localization_only) slam.SaveMap(options.output / "map.semslam");
+
+  RunSummary summary;
+  summary.statistics = stats;
+  summary.seconds = watch.ElapsedSeconds();
+  nlohmann::json run = {
+      {"sequence", sequence->directory().string()},
+      {"mode", stereo ? "stereo" : "mono"},
+      {"frames", stats.frames},
+      {"first_frame", first},
+      {"tracked", stats.tracked},
+      {"keyframes", stats.keyframes},
+      {"points", stats.map_points},
+      {"loops", stats.loops},
+      {"relocalizations", stats.relocalizations},
+      {"resets", stats.resets},
+      {"seconds", summary.seconds},
+      {"peak_rss_mib", PeakRssMiB()},
+  };
+  nlohmann::json loops = nlohmann::json::array();
+  for (const LoopEvent& e : slam.Loops()) {
+    loops.push_back({{"query_keyframe", e.query_keyframe}, {"matched_keyframe", e.matched_keyframe},
+                     {"timestamp", e.query_timestamp}, {"matches", e.matches}, {"scale", e.scale},
+                     {"correction_m", e.correction_m}});
+  }
+  run["loop_events"] = loops;
+  if (const auto truth = sequence->GroundTruth(); truth && trajectory.size() >= 3) {
+    const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+    summary.ate_rmse = ate.rmse;
+    run["ate_rmse"] = ate.rmse;
+    run["ate_alignment"] = stereo ? "se3" : "sim3";
+    run["path_length_m"] = PathLength(*truth);
+  }
+  WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
+  WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace semslam

@@ -1,0 +1,40 @@
+#pragma once
+// Runs the whole pipeline over an image sequence and writes every output into a directory:
+// trajectory.tum, keyframes.tum, trajectory.kitti, map.semslam, timing.json, run.json (and, as the
+// semantic and geographic parts are enabled, their outputs too).
+
+#include <cstddef>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include "semslam/system/slam_system.h"
+
+namespace semslam {
+
+struct RunOptions {
+  std::filesystem::path sequence;
+  std::filesystem::path output;
+  SlamOptions slam;
+  size_t first_frame = 0;
+  size_t end_frame = std::numeric_limits<size_t>::max();  // exclusive
+  std::filesystem::path map_in;   // start from this map (relocalize first)
+  bool save_map = true;
+  bool show_progress = true;
+
+  void Check() const;
+};
+
+struct RunSummary {
+  SlamStatistics statistics;
+  double seconds = 0.0;
+  double ate_rmse = -1.0;  // against the sequence's ground truth, when it has one (Sim(3) mono, SE(3) stereo)
+};
+
+// Throws InputError for unreadable inputs and InvalidArgument for bad options.
+RunSummary RunSequence(const RunOptions& options);
+
+// Parses "A:B" (either side may be empty) into [first, end). Throws InvalidArgument.
+void ParseFrameRange(const std::string& text, size_t* first, size_t* end);
+
+}  // namespace semslam

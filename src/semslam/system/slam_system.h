@@ -1,0 +1,106 @@
+#pragma once
+// The SLAM system: owns the map, the vocabulary and keyframe database, and the tracking, local-mapping and
+// loop-closing modules (the last two in their own threads). The only place that knows them all.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <opencv2/core/mat.hpp>
+
+#include "semslam/core/timing.h"
+#include "semslam/geometry/camera.h"
+#include "semslam/geometry/trajectory.h"
+#include "semslam/loop/loop_closer.h"
+#include "semslam/map/map.h"
+#include "semslam/map/map_file.h"
+#include "semslam/mapping/local_mapper.h"
+#include "semslam/tracking/tracker.h"
+
+namespace semslam {
+
+class Vocabulary;
+class KeyFrameDatabase;
+
+enum class SensorMode { kMonocular, kStereo };
+
+// How frames are fed: as fast as possible, at the camera's rate (timestamps), or waiting for the mapper
+// after every keyframe (reproducible results for tests and evaluation).
+enum class Pacing { kFast, kRealtime, kSynchronous };
+
+struct SlamOptions {
+  SensorMode mode = SensorMode::kMonocular;
+  Pacing pacing = Pacing::kRealtime;
+  TrackerOptions tracker;
+  LocalMapperOptions mapper;
+  LoopCloserOptions loop;
+  std::filesystem::path vocabulary;    // empty: the default vocabulary
+  bool localization_only = false;      // track against a loaded map without changing it
+
+  void Check() const;
+};
+
+struct SlamStatistics {
+  size_t frames = 0;
+  size_t tracked = 0;
+  size_t keyframes = 0;
+  size_t map_points = 0;
+  size_t loops = 0;
+  size_t relocalizations = 0;
+  size_t resets = 0;
+};
+
+class SlamSystem {
+ public:
+  SlamSystem(const SlamOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo);
+  ~SlamSystem();
+  SlamSystem(const SlamSystem&) = delete;
+  SlamSystem& operator=(const SlamSystem&) = delete;
+
+  // Loads a map saved by SaveMap before the first frame; tracking then starts by relocalizing.
+  MapFileContents LoadMap(const std::filesystem::path& path);
+  void SaveMap(const std::filesystem::path& path, const MapFileContents& extra = {}) const;
+
+  TrackingResult ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
+                              const cv::Mat& right = {}, const cv::Mat& mask = {});
+  // Lets mapping and loop closing (and a running global BA) finish, then stops the threads.
+  void Finish();
+
+  // Every tracked frame (world_from_camera), following its reference keyframe's current pose.
+  Trajectory FrameTrajectory() const;
+  Trajectory KeyFrameTrajectory() const;
+  SlamStatistics Statistics() const;
+  std::vector<LoopEvent> Loops() const;
+
+  Map& map() { return *map_; }
+  const Map& map() const { return *map_; }
+  LocalMapper& mapper() { return *mapper_; }
+  const Vocabulary& vocabulary() const { return *vocabulary_; }
+  TimingRegistry& timing() { return timing_; }
+  const SlamOptions& options() const { return options_; }
+
+ private:
+  void ResetMap();
+
+  SlamOptions options_;
+  PinholeCamera camera_;
+  std::optional<StereoRig> stereo_;
+  TimingRegistry timing_;
+  std::unique_ptr<Vocabulary> vocabulary_;
+  std::unique_ptr<KeyFrameDatabase> database_;
+  std::unique_ptr<Map> map_;
+  std::unique_ptr<LocalMapper> mapper_;
+  std::unique_ptr<LoopCloser> loop_closer_;
+  std::unique_ptr<Tracker> tracker_;
+  size_t frames_ = 0;
+  size_t tracked_ = 0;
+  size_t resets_ = 0;
+  double first_timestamp_ = 0.0;
+  std::optional<Stopwatch> clock_;
+  bool finished_ = false;
+  // Trajectory records of maps that were reset (kept so no frame record is lost).
+  std::vector<FrameRecord> old_records_;
+};
+
+}  // namespace semslam

@@ -1,0 +1,132 @@
+#include "semslam/tracking/relocalization.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "semslam/geometry/pnp.h"
+#include "semslam/map/map_matcher.h"
+#include "semslam/place/keyframe_database.h"
+
+namespace semslam {
+
+std::vector<KeyFrame*> DetectRelocalizationCandidates(const Frame& frame, const KeyFrameDatabase& database,
+                                                      const Map& map) {
+  const auto results = database.Query(frame.bow);
+  if (results.empty()) return {};
+  std::map<KeyFrame*, std::pair<int, double>> shared;  // keyframe -> (shared words, score)
+  int max_common = 0;
+  for (const auto& r : results) {
+    KeyFrame* kf = map.KeyFrameById(r.id);
+    if (kf == nullptr || kf->is_bad()) continue;
+    shared[kf] = {static_cast<int>(r.shared_words), r.score};
+    max_common = std::max(max_common, static_cast<int>(r.shared_words));
+  }
+  const int min_common = static_cast<int>(0.8 * max_common);
+  std::map<KeyFrame*, double> scored;
+  for (const auto& [kf, value] : shared) {
+    if (value.first > min_common) scored[kf] = value.second;
+  }
+  if (scored.empty()) return {};
+  // Accumulate each candidate's score with its scored covisible neighbours; keep the best of each group.
+  std::vector<std::pair<double, KeyFrame*>> groups;
+  double best_accumulated = 0.0;
+  for (const auto& [kf, score] : scored) {
+    double accumulated = score;
+    double best_score = score;
+    KeyFrame* best = kf;
+    for (KeyFrame* neighbour : kf->BestCovisibles(10)) {
+      const auto it = scored.find(neighbour);
+      if (it == scored.end()) continue;
+      accumulated += it->second;
+      if (it->second > best_score) {
+        best_score = it->second;
+        best = neighbour;
+      }
+    }
+    groups.emplace_back(accumulated, best);
+    best_accumulated = std::max(best_accumulated, accumulated);
+  }
+  std::vector<KeyFrame*> candidates;
+  std::set<KeyFrame*> seen;
+  std::sort(groups.begin(), groups.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [accumulated, kf] : groups) {
+    if (accumulated < 0.75 * best_accumulated) break;
+    if (seen.insert(kf).second) candidates.push_back(kf);
+  }
+  return candidates;
+}
+
+bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
+                     const std::function<int(Frame&)>& optimize_pose) {
+  const std::vector<KeyFrame*> candidates = DetectRelocalizationCandidates(frame, database, map);
+  const auto& camera = frame.data().camera;
+  for (KeyFrame* kf : candidates) {
+    std::vector<MapPoint*> matches;
+    if (SearchByBow(*kf, frame, matches, 0.75f) < 15) continue;
+
+    Points3d world_points, bearings;
+    std::vector<size_t> slots;
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (matches[i] == nullptr || matches[i]->is_bad()) continue;
+      world_points.push_back(matches[i]->position());
+      bearings.push_back(camera.Unproject(frame.features().keypoints[i].pixel.cast<double>()));
+      slots.push_back(i);
+    }
+    PnpRansacOptions options;
+    options.max_reprojection_error_px = 2.0 * std::sqrt(5.991);
+    options.focal_length = camera.fx;
+    options.seed = frame.id() ^ kf->id();
+    const auto pnp = SolvePnpRansac(world_points, bearings, options);
+    if (!pnp || pnp->num_inliers < 10) continue;
+
+    frame.SetPose(pnp->camera_from_world);
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+    for (size_t k = 0; k < slots.size(); ++k) {
+      if (pnp->inliers[k]) frame.map_points[slots[k]] = matches[slots[k]];
+    }
+    int good = optimize_pose(frame);
+    if (good < 10) continue;
+    std::set<MapPoint*> found;
+    for (size_t i = 0; i < frame.map_points.size(); ++i) {
+      if (frame.outliers[i]) {
+        frame.map_points[i] = nullptr;
+        frame.outliers[i] = false;
+      } else if (frame.map_points[i] != nullptr) {
+        found.insert(frame.map_points[i]);
+      }
+    }
+    if (good < 50) {
+      // A guided search in the candidate's map points for more matches, then again with a tighter window.
+      const int more = SearchFromKeyFrame(frame, *kf, found, 10.0f, 100);
+      if (good + more >= 50) {
+        good = optimize_pose(frame);
+        if (good > 30 && good < 50) {
+          found.clear();
+          for (size_t i = 0; i < frame.map_points.size(); ++i) {
+            if (frame.map_points[i] != nullptr && !frame.outliers[i]) found.insert(frame.map_points[i]);
+          }
+          const int extra = SearchFromKeyFrame(frame, *kf, found, 3.0f, 64);
+          if (good + extra >= 50) {
+            good = optimize_pose(frame);
+          }
+        }
+        for (size_t i = 0; i < frame.map_points.size(); ++i) {
+          if (frame.outliers[i]) {
+            frame.map_points[i] = nullptr;
+            frame.outliers[i] = false;
+          }
+        }
+      }
+    }
+    if (good >= 50) {
+      frame.reference_keyframe = kf;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace semslam

@@ -1,0 +1,622 @@
+#include "semslam/tracking/tracker.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_invoke.h>
+
+#include "semslam/core/error.h"
+#include "semslam/features/matching.h"
+#include "semslam/features/stereo_matching.h"
+#include "semslam/geometry/two_view.h"
+#include "semslam/map/map_matcher.h"
+#include "semslam/mapping/local_mapper.h"
+#include "semslam/optim/bundle_adjustment.h"
+#include "semslam/optim/pose_optimization.h"
+#include "semslam/place/keyframe_database.h"
+#include "semslam/place/vocabulary.h"
+#include "semslam/tracking/relocalization.h"
+
+namespace semslam {
+
+void TrackerOptions::Check() const {
+  orb.Check();
+  Require(init_num_features >= 0, "tracker: init_num_features must be >= 0");
+  Require(max_frames_between_keyframes >= 1, "tracker: max_frames_between_keyframes must be >= 1");
+  Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
+  Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
+  Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
+}
+
+const char* ToString(TrackingState state) {
+  switch (state) {
+    case TrackingState::kNotInitialized:
+      return "not initialized";
+    case TrackingState::kOk:
+      return "ok";
+    case TrackingState::kLost:
+      return "lost";
+  }
+  return "?";
+}
+
+Tracker::Tracker(const TrackerOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo,
+                 Map& map, const Vocabulary& vocabulary, KeyFrameDatabase& database, LocalMapper* mapper,
+                 TimingRegistry& timing)
+    : options_(options),
+      camera_(camera),
+      stereo_(std::move(stereo)),
+      map_(map),
+      vocabulary_(vocabulary),
+      database_(database),
+      mapper_(mapper),
+      timing_(timing) {
+  options_.Check();
+  camera_.Check();
+  Require(options_.monocular || stereo_.has_value(), "tracker: stereo mode needs a stereo rig");
+  extractor_ = std::make_unique<OrbExtractor>(options_.orb);
+  if (!options_.monocular) right_extractor_ = std::make_unique<OrbExtractor>(options_.orb);
+  OrbOptions init = options_.orb;
+  init.num_features = options_.init_num_features > 0 ? options_.init_num_features : 2 * options_.orb.num_features;
+  init_extractor_ = std::make_unique<OrbExtractor>(init);
+}
+
+Tracker::~Tracker() = default;
+
+void Tracker::SetMapLoaded() {
+  map_loaded_ = true;
+  state_ = TrackingState::kLost;
+}
+
+void Tracker::Reset() {
+  state_ = TrackingState::kNotInitialized;
+  last_frame_.reset();
+  init_frame_.reset();
+  velocity_.reset();
+  last_keyframe_ = nullptr;
+  reference_keyframe_ = nullptr;
+  local_keyframes_.clear();
+  local_points_.clear();
+  for (auto& record : records_) record.reference = nullptr;
+}
+
+std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
+                                                          const cv::Mat& mask, bool initialization) {
+  ScopedTimer timer(timing_, "orb_extraction");
+  const OrbExtractor& extractor = initialization ? *init_extractor_ : *extractor_;
+  FeatureSet left_features, right_features;
+  if (right.empty()) {
+    left_features = extractor.Extract(left, mask);
+    return MakeFrameData(camera_, stereo_, std::move(left_features), {}, {});
+  }
+  tbb::parallel_invoke([&] { left_features = extractor_->Extract(left, mask); },
+                       [&] { right_features = right_extractor_->Extract(right); });
+  StereoMatches stereo = MatchStereo(left_features, right_features, left, right, *stereo_);
+  return MakeFrameData(camera_, stereo_, std::move(left_features), std::move(stereo.right_u),
+                       std::move(stereo.depth));
+}
+
+TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left, const cv::Mat& right,
+                              const cv::Mat& mask) {
+  Stopwatch watch;
+  const bool mono_init = options_.monocular && state_ == TrackingState::kNotInitialized;
+  Frame frame(frame_id, timestamp, ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
+  TrackingResult result;
+
+  if (state_ == TrackingState::kNotInitialized) {
+    const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
+    if (ok) {
+      state_ = TrackingState::kOk;
+      result.initialized_now = true;
+    }
+  } else {
+    auto lock = map_.ReadLock();
+    ReplaceMergedPoints(*last_frame_);
+    bool ok = false;
+    if (state_ == TrackingState::kOk) {
+      const bool map_changed = map_.big_change_index() != last_big_change_;
+      if (map_changed) last_big_change_ = map_.big_change_index();
+      if (!velocity_ || map_changed || frame.id() < last_relocalization_frame_ + 2) {
+        ok = TrackReferenceKeyFrame(frame);
+      } else {
+        ok = TrackWithMotionModel(frame);
+        if (!ok) ok = TrackReferenceKeyFrame(frame);
+      }
+    } else {
+      ok = Relocalize(frame);
+      result.relocalized = ok;
+    }
+    if (ok) ok = TrackLocalMap(frame);
+    state_ = ok ? TrackingState::kOk : TrackingState::kLost;
+    if (ok) {
+      velocity_ = last_frame_ && last_frame_->has_pose()
+                      ? std::optional<Rigid3d>(frame.camera_from_world() * last_frame_->world_from_camera())
+                      : std::nullopt;
+      if (NeedNewKeyFrame(frame)) {
+        lock.unlock();
+        CreateNewKeyFrame(frame);
+        result.new_keyframe = true;
+      }
+      // Outliers are not carried to the next frame's motion-model search.
+      for (size_t i = 0; i < frame.map_points.size(); ++i) {
+        if (frame.outliers[i]) frame.map_points[i] = nullptr;
+      }
+    } else {
+      velocity_.reset();
+    }
+  }
+
+  if (state_ == TrackingState::kLost && !options_.localization_only && !map_loaded_) {
+    auto lock = map_.ReadLock();
+    if (map_.NumKeyFrames() <= 5) {
+      spdlog::warn("frame {}: tracking lost soon after initialization; the map is reset", frame.id());
+      result.reset_requested = true;
+    }
+  }
+
+  FrameRecord record;
+  record.frame_id = frame.id();
+  record.timestamp = timestamp;
+  if (state_ == TrackingState::kOk && frame.has_pose()) {
+    if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
+    record.reference = frame.reference_keyframe;
+    auto lock = map_.ReadLock();
+    record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
+    result.camera_from_world = frame.camera_from_world();
+    result.matched_points = inliers_;
+  }
+  records_.push_back(record);
+  result.state = state_;
+  if (result.relocalized) ++num_relocalizations_;
+  last_frame_ = std::make_unique<Frame>(std::move(frame));
+  timing_.Add("tracking", watch.ElapsedMs());
+  return result;
+}
+
+void Tracker::ReplaceMergedPoints(Frame& frame) const {
+  for (auto& p : frame.map_points) {
+    if (p != nullptr) {
+      MapPoint* resolved = p->Resolve();
+      p = resolved->is_bad() ? nullptr : resolved;
+    }
+  }
+}
+
+void Tracker::ComputeBow(Frame& frame) const {
+  if (frame.has_bow) return;
+  vocabulary_.Transform(frame.features().descriptors, &frame.bow, &frame.feature_vector);
+  frame.has_bow = true;
+}
+
+bool Tracker::InitializeStereo(Frame& frame) {
+  if (frame.num_features() < 500) return false;
+  auto lock = map_.WriteLock();
+  frame.SetPose(Rigid3d());
+  KeyFrame* kf = map_.AddKeyFrame(frame);
+  int created = 0;
+  for (size_t i = 0; i < frame.num_features(); ++i) {
+    const auto world = kf->UnprojectStereo(static_cast<int>(i));
+    if (!world) continue;
+    MapPoint* p = map_.AddMapPoint(*world, kf);
+    p->AddObservation(kf, static_cast<int>(i));
+    kf->SetMapPoint(static_cast<int>(i), p);
+    p->UpdateDescriptor();
+    p->UpdateNormalAndDepth();
+    frame.map_points[i] = p;
+    ++created;
+  }
+  spdlog::info("stereo map initialized with {} points", created);
+  last_keyframe_ = reference_keyframe_ = kf;
+  frame.reference_keyframe = kf;
+  local_keyframes_ = {kf};
+  local_points_ = map_.MapPoints();
+  lock.unlock();
+  if (mapper_) mapper_->InsertKeyFrame(kf);
+  return true;
+}
+
+bool Tracker::InitializeMonocular(Frame& frame) {
+  if (!init_frame_) {
+    if (frame.num_features() > 100) {
+      init_frame_ = std::make_unique<Frame>(frame);
+      init_prior_positions_.clear();
+      for (const auto& kp : frame.features().keypoints) init_prior_positions_.push_back(kp.pixel);
+    }
+    return false;
+  }
+  if (frame.num_features() <= 100) {
+    init_frame_.reset();
+    return false;
+  }
+  std::vector<int> matches12 =
+      MatchForInitialization(init_frame_->features(), frame.features(), init_prior_positions_, 100);
+  const int num_matches = static_cast<int>(std::count_if(matches12.begin(), matches12.end(), [](int m) { return m >= 0; }));
+  if (num_matches < options_.init_min_matches) {
+    init_frame_.reset();
+    return false;
+  }
+
+  std::vector<Eigen::Vector2d> pixels1, pixels2;
+  std::vector<int> index1;
+  for (size_t i = 0; i < matches12.size(); ++i) {
+    if (matches12[i] < 0) continue;
+    pixels1.push_back(init_frame_->features().keypoints[i].pixel.cast<double>());
+    pixels2.push_back(frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel.cast<double>());
+    index1.push_back(static_cast<int>(i));
+  }
+  TwoViewOptions two_view_options;
+  two_view_options.seed = frame.id();
+  const TwoViewResult two_view = InitializeTwoView(pixels1, pixels2, camera_, two_view_options);
+  if (!two_view.success) {
+    spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
+    return false;
+  }
+
+  auto lock = map_.WriteLock();
+  init_frame_->SetPose(Rigid3d());
+  frame.SetPose(two_view.camera2_from_camera1);
+  KeyFrame* kf1 = map_.AddKeyFrame(*init_frame_);
+  KeyFrame* kf2 = map_.AddKeyFrame(frame);
+  for (size_t m = 0; m < two_view.points.size(); ++m) {
+    if (!two_view.triangulated[m]) continue;
+    const int i1 = index1[m];
+    const int i2 = matches12[static_cast<size_t>(i1)];
+    MapPoint* p = map_.AddMapPoint(two_view.points[m], kf2);
+    kf1->SetMapPoint(i1, p);
+    kf2->SetMapPoint(i2, p);
+    p->AddObservation(kf1, i1);
+    p->AddObservation(kf2, i2);
+    p->UpdateDescriptor();
+    p->UpdateNormalAndDepth();
+  }
+  kf1->UpdateConnections();
+  kf2->UpdateConnections();
+  spdlog::info("monocular map initialized from frames {} and {} with {} points ({})", init_frame_->id(), frame.id(),
+               map_.NumMapPoints(), two_view.model);
+
+  // Full bundle adjustment of the two views, then the scale: median scene depth 1.
+  GlobalBundleAdjustment(map_, 20, nullptr);
+  const double median_depth = kf1->SceneDepthQuantile(2);
+  if (median_depth <= 0 || kf2->CountTrackedPoints(1) < 100) {
+    spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(), median_depth,
+                  kf2->CountTrackedPoints(1));
+    map_.Clear();
+    init_frame_.reset();
+    return false;
+  }
+  const double inv = 1.0 / median_depth;
+  Rigid3d pose2 = kf2->camera_from_world();
+  pose2.translation *= inv;
+  kf2->SetPose(pose2);
+  for (MapPoint* p : map_.MapPoints()) {
+    p->SetPosition(p->position() * inv);
+    p->UpdateNormalAndDepth();
+  }
+  frame.SetPose(kf2->camera_from_world());
+  frame.map_points = kf2->map_points();
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  frame.reference_keyframe = kf2;
+  last_keyframe_ = reference_keyframe_ = kf2;
+  local_keyframes_ = {kf1, kf2};
+  local_points_ = map_.MapPoints();
+  // The first frame of the map is recorded too, so the trajectory starts where the map does.
+  if (!records_.empty()) {
+    for (auto& record : records_) {
+      if (record.frame_id == init_frame_->id()) {
+        record.reference = kf1;
+        record.camera_from_reference = Rigid3d();
+      }
+    }
+  }
+  lock.unlock();
+  init_frame_.reset();
+  if (mapper_) {
+    mapper_->InsertKeyFrame(kf1);
+    mapper_->InsertKeyFrame(kf2);
+  }
+  inliers_ = kf2->CountTrackedPoints(1);
+  return true;
+}
+
+int Tracker::OptimizeFramePose(Frame& frame) {
+  ScopedTimer timer(timing_, "pose_optimization");
+  PoseOptimizationProblem problem;
+  problem.camera = frame.data().camera;
+  problem.camera_from_world = frame.camera_from_world();
+  const auto& data = frame.data();
+  std::vector<size_t> slots;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p == nullptr) continue;
+    const Keypoint& kp = data.features.keypoints[i];
+    PoseObservation obs;
+    obs.point = p->position();
+    obs.pixel = kp.pixel.cast<double>();
+    obs.right_u = (!data.right_u.empty() && data.right_u[i] >= 0) ? data.right_u[i] : -1.0;
+    obs.inv_sigma2 = data.features.pyramid.inv_sigma2[kp.level];
+    problem.observations.push_back(obs);
+    slots.push_back(i);
+  }
+  if (data.stereo) problem.baseline = data.stereo->baseline;
+  if (problem.observations.size() < 3) return 0;
+  const PoseOptimizationResult result = OptimizePose(problem);
+  frame.SetPose(result.camera_from_world);
+  int inliers = 0;
+  for (size_t k = 0; k < slots.size(); ++k) {
+    frame.outliers[slots[k]] = !result.inliers[k];
+    inliers += result.inliers[k] ? 1 : 0;
+  }
+  return inliers;
+}
+
+bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
+  ComputeBow(frame);
+  std::vector<MapPoint*> matches;
+  const int n = SearchByBow(*reference_keyframe_, frame, matches, 0.7f);
+  if (n < 15) return false;
+  frame.map_points = matches;
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  frame.SetPose(last_frame_->camera_from_world());
+  OptimizeFramePose(frame);
+  int good = 0;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.map_points[i] == nullptr) continue;
+    if (frame.outliers[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outliers[i] = false;
+    } else if (frame.map_points[i]->num_observations() > 0) {
+      ++good;
+    }
+  }
+  return good >= 10;
+}
+
+bool Tracker::TrackWithMotionModel(Frame& frame) {
+  frame.SetPose(*velocity_ * last_frame_->camera_from_world());
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  const float radius = options_.monocular ? 15.0f : 7.0f;
+  int n = SearchFromLastFrame(frame, *last_frame_, radius, options_.monocular);
+  if (n < 20) {
+    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+    n = SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
+  }
+  if (n < 20) return false;
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  OptimizeFramePose(frame);
+  int good = 0;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.map_points[i] == nullptr) continue;
+    if (frame.outliers[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outliers[i] = false;
+    } else if (frame.map_points[i]->num_observations() > 0) {
+      ++good;
+    }
+  }
+  return good >= 10;
+}
+
+void Tracker::UpdateLocalMap(Frame& frame) {
+  // Keyframes that see the frame's points, weighted by how many they see.
+  std::map<KeyFrame*, int> counter;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p == nullptr) continue;
+    if (p->is_bad()) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
+    for (const auto& [kf, index] : p->observations()) ++counter[kf];
+  }
+  if (counter.empty()) return;
+  local_keyframes_.clear();
+  KeyFrame* best = nullptr;
+  int best_count = 0;
+  for (const auto& [kf, count] : counter) {
+    if (kf->is_bad()) continue;
+    if (count > best_count) {
+      best_count = count;
+      best = kf;
+    }
+    local_keyframes_.push_back(kf);
+    kf->tracking_local_frame = frame.id();
+  }
+  // Neighbours, children and parent of those keyframes, up to 80 in all.
+  const size_t direct = local_keyframes_.size();
+  for (size_t k = 0; k < direct && local_keyframes_.size() < 80; ++k) {
+    KeyFrame* kf = local_keyframes_[k];
+    auto add = [&](KeyFrame* other) {
+      if (other == nullptr || other->is_bad() || other->tracking_local_frame == frame.id()) return false;
+      local_keyframes_.push_back(other);
+      other->tracking_local_frame = frame.id();
+      return true;
+    };
+    for (KeyFrame* neighbour : kf->BestCovisibles(10)) {
+      if (add(neighbour)) break;
+    }
+    for (KeyFrame* child : kf->children()) {
+      if (add(child)) break;
+    }
+    add(kf->parent());
+  }
+  if (best != nullptr) {
+    reference_keyframe_ = best;
+    frame.reference_keyframe = best;
+  }
+  local_points_.clear();
+  for (KeyFrame* kf : local_keyframes_) {
+    for (MapPoint* p : kf->map_points()) {
+      if (p == nullptr || p->is_bad() || p->tracking_local_map_frame == frame.id()) continue;
+      p->tracking_local_map_frame = frame.id();
+      local_points_.push_back(p);
+    }
+  }
+}
+
+void Tracker::SearchLocalMapPoints(Frame& frame) {
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p == nullptr) continue;
+    if (p->is_bad()) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
+    p->IncreaseVisible();
+    p->tracking_last_seen_frame = frame.id();
+    p->track_in_view = false;
+  }
+  const FrameData& data = frame.data();
+  const Eigen::Vector3d center = frame.center();
+  int to_match = 0;
+  for (MapPoint* p : local_points_) {
+    p->track_in_view = false;
+    if (p->tracking_last_seen_frame == frame.id() || p->is_bad()) continue;
+    const Eigen::Vector3d in_camera = frame.camera_from_world() * p->position();
+    if (in_camera.z() <= 0) continue;
+    const Eigen::Vector2d uv = data.camera.Project(in_camera);
+    if (!data.InBounds(static_cast<float>(uv.x()), static_cast<float>(uv.y()))) continue;
+    const Eigen::Vector3d ray = p->position() - center;
+    const float distance = static_cast<float>(ray.norm());
+    if (distance < p->min_distance() || distance > p->max_distance()) continue;
+    const float view_cos = static_cast<float>(ray.dot(p->normal()) / distance);
+    if (view_cos < 0.5f) continue;
+    p->track_in_view = true;
+    p->track_u = static_cast<float>(uv.x());
+    p->track_v = static_cast<float>(uv.y());
+    p->track_right_u = data.stereo ? static_cast<float>(data.stereo->ProjectRightU(in_camera)) : -1.0f;
+    p->track_level = p->PredictLevel(distance, data.features.pyramid);
+    p->track_view_cos = view_cos;
+    p->IncreaseVisible();
+    ++to_match;
+  }
+  if (to_match == 0) return;
+  float radius = options_.monocular ? 1.0f : 3.0f;
+  if (frame.id() < last_relocalization_frame_ + 2) radius = 5.0f;
+  SearchLocalPoints(frame, local_points_, radius);
+}
+
+bool Tracker::TrackLocalMap(Frame& frame) {
+  ScopedTimer timer(timing_, "track_local_map");
+  UpdateLocalMap(frame);
+  SearchLocalMapPoints(frame);
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  OptimizeFramePose(frame);
+  inliers_ = 0;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p == nullptr) continue;
+    if (!frame.outliers[i]) {
+      p->IncreaseFound();
+      if (p->num_observations() > 0 || options_.localization_only) ++inliers_;
+    } else if (!options_.monocular) {
+      frame.map_points[i] = nullptr;
+    }
+  }
+  if (frame.id() < last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes) &&
+      inliers_ < 50) {
+    return false;
+  }
+  return inliers_ >= 30;
+}
+
+bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
+  if (options_.localization_only || mapper_ == nullptr) return false;
+  if (mapper_->IsStopped() || mapper_->StopRequested()) return false;
+  const size_t num_keyframes = map_.NumKeyFrames();
+  const auto max_frames = static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
+  if (frame.id() < last_relocalization_frame_ + max_frames && num_keyframes > max_frames) return false;
+  const int min_observations = num_keyframes <= 2 ? 2 : 3;
+  const int reference_matches = reference_keyframe_->CountTrackedPoints(min_observations);
+  const bool mapper_idle = mapper_->AcceptsKeyFrames();
+
+  int tracked_close = 0, untracked_close = 0;
+  if (!options_.monocular) {
+    const FrameData& data = frame.data();
+    const double close = options_.close_depth_baselines * stereo_->baseline;
+    for (size_t i = 0; i < frame.num_features(); ++i) {
+      if (data.depth[i] > 0 && data.depth[i] < close) {
+        if (frame.map_points[i] != nullptr && !frame.outliers[i]) {
+          ++tracked_close;
+        } else {
+          ++untracked_close;
+        }
+      }
+    }
+  }
+  const bool need_close = tracked_close < 100 && untracked_close > 70;
+  double ratio = options_.monocular ? 0.9 : 0.75;
+  if (num_keyframes < 2) ratio = 0.4;
+
+  const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;
+  const bool c1a = frame.id() >= last_kf_frame + max_frames;
+  const bool c1b = frame.id() >= last_kf_frame + static_cast<std::uint64_t>(options_.min_frames_between_keyframes) &&
+                   mapper_idle;
+  const bool c1c = !options_.monocular && (inliers_ < reference_matches * 0.25 || need_close);
+  const bool c2 = (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
+  if (!((c1a || c1b || c1c) && c2)) return false;
+  if (mapper_idle) return true;
+  mapper_->InterruptBA();
+  return !options_.monocular && mapper_->KeyframesInQueue() < 3;
+}
+
+void Tracker::CreateNewKeyFrame(Frame& frame) {
+  if (!mapper_->SetNotStop(true)) return;
+  auto lock = map_.WriteLock();
+  KeyFrame* kf = map_.AddKeyFrame(frame);
+  reference_keyframe_ = kf;
+  frame.reference_keyframe = kf;
+  if (!options_.monocular) {
+    // Close stereo points the map does not have yet become map points now, so the next frames track them.
+    std::vector<std::pair<float, int>> by_depth;
+    const FrameData& data = frame.data();
+    for (size_t i = 0; i < frame.num_features(); ++i) {
+      if (data.depth[i] > 0) by_depth.emplace_back(data.depth[i], static_cast<int>(i));
+    }
+    std::sort(by_depth.begin(), by_depth.end());
+    const double close = options_.close_depth_baselines * stereo_->baseline;
+    int count = 0;
+    for (const auto& [depth, i] : by_depth) {
+      MapPoint* existing = kf->map_point(i);
+      const bool create = existing == nullptr || existing->is_bad() || existing->num_observations() < 1;
+      if (create) {
+        if (existing != nullptr) kf->SetMapPoint(i, nullptr);
+        const auto world = kf->UnprojectStereo(i);
+        MapPoint* p = map_.AddMapPoint(*world, kf);
+        p->AddObservation(kf, i);
+        kf->SetMapPoint(i, p);
+        p->UpdateDescriptor();
+        p->UpdateNormalAndDepth();
+        frame.map_points[static_cast<size_t>(i)] = p;
+      }
+      ++count;
+      if (depth > close && count > 100) break;
+    }
+  }
+  last_keyframe_ = kf;
+  lock.unlock();
+  mapper_->InsertKeyFrame(kf);
+  mapper_->SetNotStop(false);
+}
+
+bool Tracker::Relocalize(Frame& frame) {
+  ScopedTimer timer(timing_, "relocalization");
+  ComputeBow(frame);
+  const bool ok = RelocalizeFrame(frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); });
+  if (!ok) return false;
+  last_relocalization_frame_ = frame.id();
+  velocity_.reset();
+  // The reference keyframe is chosen by the local map step that follows.
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p != nullptr && !frame.outliers[i] && !p->observations().empty()) {
+      reference_keyframe_ = p->observations().begin()->first;
+      break;
+    }
+  }
+  spdlog::info("frame {}: relocalized", frame.id());
+  return true;
+}
+
+}  // namespace semslam
