@@ -16,12 +16,12 @@ namespace semslam {
 
 // One OXTS reading, in the field order of KITTI's dataformat.txt.
 struct OxtsRecord {
-  double lat = 0, lon = 0, alt = 0;           // deg, deg, m
-  double roll = 0, pitch = 0, yaw = 0;        // rad
-  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;  // m/s (north, east, forward, left, up)
+  double lat = 0, lon = 0, alt = 0;                       // deg, deg, m
+  double roll = 0, pitch = 0, yaw = 0;                    // rad
+  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;          // m/s (north, east, forward, left, up)
   double ax = 0, ay = 0, az = 0, af = 0, al = 0, au = 0;  // m/s^2
   double wx = 0, wy = 0, wz = 0, wf = 0, wl = 0, wu = 0;  // rad/s
-  double pos_accuracy = 0, vel_accuracy = 0;  // m, m/s
+  double pos_accuracy = 0, vel_accuracy = 0;              // m, m/s
   int navstat = 0, numsats = 0, posmode = 0, velmode = 0, orimode = 0;
 
   static constexpr int kNumFields = 30;
@@ -43,12 +43,14 @@ struct StampedOxts {
 std::vector<StampedOxts> ReadOxtsFolder(const std::filesystem::path& oxts_dir);
 void WriteOxtsFolder(const std::filesystem::path& oxts_dir, const std::vector<StampedOxts>& readings);
 
-// calib_cam_to_cam.txt (K_0x, D_0x, R_0x, T_0x, S_rect_0x, R_rect_0x, P_rect_0x, ...): every key as its numbers.
+// calib_cam_to_cam.txt (K_0x, D_0x, R_0x, T_0x, S_rect_0x, R_rect_0x, P_rect_0x, ...): every key as its
+// numbers.
 struct KittiRawCalibFile {
   std::map<std::string, std::vector<double>> values;
   // The numbers under `key`, requiring exactly `count` of them; throws InputError naming the file and key.
   std::vector<double> Get(const std::string& key, size_t count) const;
   std::filesystem::path file;
+  std::map<std::string, int> lines;  // the line of each key, for error messages
 };
 KittiRawCalibFile ReadKittiRawCalibFile(const std::filesystem::path& path);
 
