@@ -8,6 +8,8 @@
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
 #include "semslam/core/text_reader.h"
+#include "semslam/io/sequence_internal.h"
+#include "semslam/io/trajectory_io.h"
 
 namespace semslam {
 
@@ -145,6 +147,59 @@ KittiCalibration MakeKittiCalibration(const StereoRig& rig) {
   calibration.projection = {p0, p1, p0, p1};
   calibration.num_projections = 4;
   return calibration;
+}
+
+std::unique_ptr<ImageSequence> OpenKittiOdometry(const fs::path& sequence_dir) {
+  io_internal::SequenceFiles files;
+  files.directory = io_internal::NormalizeDirectory(sequence_dir);
+  const fs::path& dir = files.directory;
+  files.name = dir.filename().string();
+  std::error_code ec;
+  if (!fs::is_directory(dir / "image_0", ec)) {
+    throw InputError(dir / "image_0", "folder not found (a KITTI odometry sequence has image_0/%06d.png)");
+  }
+  files.left = io_internal::NumberedFiles(dir / "image_0", 6, ".png");
+  const size_t n = files.left.size();
+
+  const KittiCalibration calibration = ReadKittiCalibration(dir / "calib.txt");
+  files.camera = calibration.Camera0(1, 1);
+  files.camera.width = files.camera.height = 0;  // set from the first image
+
+  const fs::path times_file = dir / "times.txt";
+  const std::vector<double> times = ReadTimes(times_file);
+  if (times.size() < n) {
+    throw InputError(times_file, fmt::format("lists {} timestamps, fewer than the {} images in image_0/",
+                                             times.size(), n));
+  }
+  files.timestamps.assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(n));
+
+  if (fs::is_directory(dir / "image_1", ec) && calibration.num_projections >= 2) {
+    const std::vector<fs::path> right = io_internal::ListFiles(dir / "image_1", {".png"});
+    if (right.size() < n) {
+      throw InputError(dir / "image_1",
+                       fmt::format("holds {} images, fewer than the {} in image_0/ (stereo pairs "
+                                   "need both)",
+                                   right.size(), n));
+    }
+    for (size_t i = 0; i < n; ++i) files.right.push_back(dir / "image_1" / files.left[i].filename());
+    files.baseline = -calibration.projection[1](0, 3) / calibration.projection[1](0, 0);
+  }
+
+  const fs::path poses = dir.parent_path().parent_path() / "poses" / (files.name + ".txt");
+  if (fs::is_regular_file(poses, ec)) {
+    const std::vector<Rigid3d> world_from_camera = ReadKittiPoses(poses);
+    if (world_from_camera.size() < n) {
+      throw InputError(poses, fmt::format("holds {} poses, fewer than the {} images of the sequence",
+                                          world_from_camera.size(), n));
+    }
+    Trajectory truth;
+    truth.reserve(n);
+    for (size_t i = 0; i < n; ++i) truth.push_back({files.timestamps[i], world_from_camera[i]});
+    files.ground_truth = std::move(truth);
+  }
+  if (fs::is_directory(dir / "label_0", ec)) files.labels = dir / "label_0";
+  if (fs::is_directory(dir / "depth_0", ec)) files.depth = dir / "depth_0";
+  return io_internal::MakeFileSequence(std::move(files));
 }
 
 }  // namespace semslam

@@ -5,12 +5,14 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/eigen_types.h"
 #include "semslam/geometry/rigid3.h"
+#include "semslam/io/sequence.h"
 
 namespace semslam {
 
@@ -56,5 +58,18 @@ KittiRawCalibFile ReadKittiRawCalibFile(const std::filesystem::path& path);
 
 // Rigid transforms from calib_imu_to_velo.txt / calib_velo_to_cam.txt (R: 9 numbers, T: 3).
 Rigid3d ReadKittiRawRigid(const std::filesystem::path& path);  // velo_from_imu or cam_from_velo
+
+// `file_name` (calib_cam_to_cam.txt, calib_imu_to_velo.txt, calib_velo_to_cam.txt) in the drive folder or its
+// parent (KITTI's date folder). Throws InputError naming both places when it is in neither.
+std::filesystem::path FindKittiRawCalibFile(const std::filesystem::path& drive_dir,
+                                            const std::string& file_name);
+// The rectified grey camera 0 from the OXTS (IMU) frame: R_rect_00 * cam0_from_velo * velo_from_imu.
+Rigid3d ReadKittiRawRectifiedCam0FromImu(const std::filesystem::path& drive_dir);
+
+// Opens a KITTI raw drive folder (<date>_drive_XXXX_sync/): image_00/data/%010d.png with
+// image_00/timestamps.txt (Unix seconds), stereo when image_01/data/ is there too; camera from P_rect_00 and
+// S_rect_00 (baseline from P_rect_01) of calib_cam_to_cam.txt. No ground truth (the OXTS poses are the geo
+// module's business).
+std::unique_ptr<ImageSequence> OpenKittiRaw(const std::filesystem::path& drive_dir);
 
 }  // namespace semslam
