@@ -8,6 +8,7 @@
 #include <future>
 #include <limits>
 #include <numbers>
+#include <system_error>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/epipolar.h"
@@ -50,31 +51,34 @@ struct ModelFit {
   int num_inliers = 0;
 };
 
-// Squared distance between `x` and the dehomogenized `y`; infinite when y is at infinity.
-double SquaredTransferError(const Eigen::Vector2d& x, const Eigen::Vector3d& y) {
-  if (!(std::abs(y.z()) > 1e-12)) return std::numeric_limits<double>::infinity();
-  return (x - y.hnormalized()).squaredNorm();
-}
-
 // ORB-SLAM's score: each image whose chi2 = (error / sigma)^2 is under `chi2_threshold` adds
-// score_threshold - chi2; a match is an inlier when both images are under it.
+// score_threshold - chi2; a match is an inlier when both images are under it. Written on scalars: this loop
+// is most of the time of the initialization.
 double ScoreHomography(const Eigen::Matrix3d& h21, const Points2d& x1, const Points2d& x2,
                        const TwoViewOptions& options, std::vector<bool>* inliers) {
   const Eigen::Matrix3d h12 = h21.inverse();
   const double inv_sigma2 = 1.0 / (options.sigma_px * options.sigma_px);
+  const double threshold = options.chi2_homography;
+  const double score_threshold = options.score_threshold;
+  // chi2 of `x` against H applied to `y`; infinite when H y is at infinity.
+  const auto transfer_chi2 = [inv_sigma2](const Eigen::Matrix3d& h, const Eigen::Vector2d& y,
+                                          const Eigen::Vector2d& x) {
+    const double w = h(2, 0) * y.x() + h(2, 1) * y.y() + h(2, 2);
+    if (!(std::abs(w) > 1e-12)) return std::numeric_limits<double>::infinity();
+    const double inv_w = 1.0 / w;
+    const double du = (h(0, 0) * y.x() + h(0, 1) * y.y() + h(0, 2)) * inv_w - x.x();
+    const double dv = (h(1, 0) * y.x() + h(1, 1) * y.y() + h(1, 2)) * inv_w - x.y();
+    return (du * du + dv * dv) * inv_sigma2;
+  };
   double score = 0.0;
   for (size_t i = 0; i < x1.size(); ++i) {
-    const double chi2_in2 = SquaredTransferError(x2[i], h21 * x1[i].homogeneous()) * inv_sigma2;
-    const double chi2_in1 = SquaredTransferError(x1[i], h12 * x2[i].homogeneous()) * inv_sigma2;
-    bool inlier = true;
-    for (const double chi2 : {chi2_in1, chi2_in2}) {
-      if (chi2 < options.chi2_homography) {
-        score += options.score_threshold - chi2;
-      } else {
-        inlier = false;
-      }
-    }
-    if (inliers != nullptr) (*inliers)[i] = inlier;
+    const double chi2_in2 = transfer_chi2(h21, x1[i], x2[i]);
+    const double chi2_in1 = transfer_chi2(h12, x2[i], x1[i]);
+    const bool in2 = chi2_in2 < threshold;
+    const bool in1 = chi2_in1 < threshold;
+    if (in2) score += score_threshold - chi2_in2;
+    if (in1) score += score_threshold - chi2_in1;
+    if (inliers != nullptr) (*inliers)[i] = in1 && in2;
   }
   return score;
 }
@@ -82,27 +86,28 @@ double ScoreHomography(const Eigen::Matrix3d& h21, const Points2d& x1, const Poi
 double ScoreFundamental(const Eigen::Matrix3d& f21, const Points2d& x1, const Points2d& x2,
                         const TwoViewOptions& options, std::vector<bool>* inliers) {
   const double inv_sigma2 = 1.0 / (options.sigma_px * options.sigma_px);
+  const double threshold = options.chi2_fundamental;
+  const double score_threshold = options.score_threshold;
+  const Eigen::Matrix3d& f = f21;
   double score = 0.0;
   for (size_t i = 0; i < x1.size(); ++i) {
-    const Eigen::Vector3d p1 = x1[i].homogeneous();
-    const Eigen::Vector3d p2 = x2[i].homogeneous();
-    const Eigen::Vector3d line2 = f21 * p1;              // epipolar line of x1 in image 2
-    const Eigen::Vector3d line1 = f21.transpose() * p2;  // epipolar line of x2 in image 1
-    const double residual = p2.dot(line2);               // = p1.dot(line1)
-    const double norm2 = line2.head<2>().squaredNorm();
-    const double norm1 = line1.head<2>().squaredNorm();
-    const double inf = std::numeric_limits<double>::infinity();
-    const double chi2_in2 = norm2 > 0 ? residual * residual / norm2 * inv_sigma2 : inf;
-    const double chi2_in1 = norm1 > 0 ? residual * residual / norm1 * inv_sigma2 : inf;
-    bool inlier = true;
-    for (const double chi2 : {chi2_in1, chi2_in2}) {
-      if (chi2 < options.chi2_fundamental) {
-        score += options.score_threshold - chi2;
-      } else {
-        inlier = false;
-      }
-    }
-    if (inliers != nullptr) (*inliers)[i] = inlier;
+    const double u1 = x1[i].x(), v1 = x1[i].y(), u2 = x2[i].x(), v2 = x2[i].y();
+    // Epipolar line of x1 in image 2 (a2, b2, c2) and of x2 in image 1 (a1, b1, c1).
+    const double a2 = f(0, 0) * u1 + f(0, 1) * v1 + f(0, 2);
+    const double b2 = f(1, 0) * u1 + f(1, 1) * v1 + f(1, 2);
+    const double c2 = f(2, 0) * u1 + f(2, 1) * v1 + f(2, 2);
+    const double a1 = f(0, 0) * u2 + f(1, 0) * v2 + f(2, 0);
+    const double b1 = f(0, 1) * u2 + f(1, 1) * v2 + f(2, 1);
+    const double residual = a2 * u2 + b2 * v2 + c2;  // x2^T F x1
+    const double residual2 = residual * residual * inv_sigma2;
+    const double norm2 = a2 * a2 + b2 * b2;
+    const double norm1 = a1 * a1 + b1 * b1;
+    // chi2 < threshold  <=>  residual2 < threshold * norm (no division, and a zero norm is never an inlier).
+    const bool in2 = residual2 < threshold * norm2;
+    const bool in1 = residual2 < threshold * norm1;
+    if (in2) score += score_threshold - residual2 / norm2;
+    if (in1) score += score_threshold - residual2 / norm1;
+    if (inliers != nullptr) (*inliers)[i] = in1 && in2;
   }
   return score;
 }
@@ -281,9 +286,16 @@ TwoViewResult InitializeTwoView(const std::vector<Eigen::Vector2d>& pixels1,
     std::copy(draw.begin(), draw.end(), set.begin());
   }
   ModelFit homography, fundamental;
+  std::future<ModelFit> fundamental_future;
   if (options.parallel) {
-    auto fundamental_future = std::async(
-        std::launch::async, [&] { return FitModel(Model::kFundamental, ideal1, ideal2, sets, options); });
+    try {
+      fundamental_future = std::async(
+          std::launch::async, [&] { return FitModel(Model::kFundamental, ideal1, ideal2, sets, options); });
+    } catch (const std::system_error&) {
+      // No thread available: the same work, in sequence.
+    }
+  }
+  if (fundamental_future.valid()) {
     homography = FitModel(Model::kHomography, ideal1, ideal2, sets, options);
     fundamental = fundamental_future.get();
   } else {
