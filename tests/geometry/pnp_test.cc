@@ -158,13 +158,15 @@ TEST(PnpRansac, DegenerateOrTooFewGiveNothing) {
 
 TEST(PnpRansac, BadInputThrows) {
   PnpRansacOptions options;
+  options.focal_length = TestCamera().fx;
   const Correspondences c = MakeCorrespondences(20, 0.0, 0.0, 8);
   EXPECT_THROW(SolvePnpRansac(c.world_points, Points3d(c.bearings.begin(), c.bearings.end() - 1), options),
                InvalidArgument);
   Points3d bad = c.world_points;
   bad[3].x() = std::nan("");
   EXPECT_THROW(SolvePnpRansac(bad, c.bearings, options), InvalidArgument);
-  options.focal_length = 0.0;
+  EXPECT_NO_THROW(SolvePnpRansac(c.world_points, c.bearings, options));
+  options.focal_length = 0.0;  // not set
   EXPECT_THROW(SolvePnpRansac(c.world_points, c.bearings, options), InvalidArgument);
 }
 

@@ -116,7 +116,7 @@ LinearSystem BuildSystem(const Rigid3d& camera_from_world, const Points3d& world
 void PnpRansacOptions::Check() const {
   Require(std::isfinite(max_reprojection_error_px) && max_reprojection_error_px > 0,
           "pnp: max_reprojection_error_px must be positive");
-  Require(std::isfinite(focal_length) && focal_length > 0, "pnp: focal_length must be positive");
+  Require(std::isfinite(focal_length) && focal_length > 0, "pnp: focal_length must be set (positive)");
   Require(confidence > 0 && confidence < 1, "pnp: confidence must be in (0, 1)");
   Require(max_iterations >= 1, "pnp: max_iterations must be >= 1");
   Require(min_inliers >= 3, "pnp: min_inliers must be >= 3");

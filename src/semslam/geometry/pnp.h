@@ -30,9 +30,10 @@ Rigid3d RefinePose(const Rigid3d& camera_from_world, const Points3d& world_point
                    const std::vector<bool>& use = {}, int max_iterations = 10);
 
 struct PnpRansacOptions {
-  // Inlier threshold on the reprojection error, in pixels of a camera with focal length `focal_length`.
+  // Inlier threshold on the reprojection error, in pixels of a camera with focal length `focal_length` (which
+  // has no default: the caller's camera, e.g. PinholeCamera::fx).
   double max_reprojection_error_px = 2.0 * 2.447;  // 2 sigma * sqrt(chi2 95 %, 2 dof)
-  double focal_length = 500.0;
+  double focal_length = 0.0;
   double confidence = 0.99;  // adaptive iteration count: P(one all-inlier sample)
   int max_iterations = 300;
   int min_inliers = 10;        // fewer (after refinement): no solution
