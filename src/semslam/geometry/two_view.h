@@ -1,9 +1,11 @@
 #pragma once
 // Monocular map initialization from two views (Mur-Artal et al. 2015, ORB-SLAM §IV): a homography and a
-// fundamental matrix are estimated in parallel, by RANSAC over the same random 8-point sets, and scored by
-// their symmetric transfer errors; the homography is chosen for planar or low-parallax scenes
-// (S_H / (S_H + S_F) > homography_ratio), the fundamental matrix otherwise. The chosen model is decomposed
-// into its motion hypotheses (8 for H, 4 for E = K^T F K), the inliers are triangulated under each, and the
+// fundamental matrix are estimated in parallel, by RANSAC over the same random 8-point sets (H by DLT on the
+// first 4 matches of a set, F by the eight-point algorithm on all 8; both refit on their inliers), and scored
+// by their symmetric transfer errors; the homography is chosen for planar or low-parallax scenes (S_H / (S_H
+// + S_F) > homography_ratio), the fundamental matrix otherwise. The chosen model is decomposed into its
+// motion hypotheses (8 for H; 4 for E = K^T F K, after refining its motion on the Sampson error, as the
+// linear estimate is biased at small baselines), the inliers are triangulated under each, and the
 // best is accepted only when it is unambiguous, explains most inliers and has enough parallax.
 
 #include <cstdint>
