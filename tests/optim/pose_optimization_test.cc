@@ -102,8 +102,8 @@ TEST(OptimizePose, CeresAndGaussNewtonAgree) {
     options.solver = PoseSolver::kCeres;
     const PoseOptimizationResult ceres = OptimizePose(s.problem, options);
     ExpectRecovered(s, ceres, 2e-3, 0.03);
-    EXPECT_LT(RotationError(gn.camera_from_world.rotation, ceres.camera_from_world.rotation), 1e-6);
-    EXPECT_LT((gn.camera_from_world.translation - ceres.camera_from_world.translation).norm(), 1e-5);
+    EXPECT_LT(RotationError(gn.camera_from_world.rotation, ceres.camera_from_world.rotation), 1e-5);
+    EXPECT_LT((gn.camera_from_world.translation - ceres.camera_from_world.translation).norm(), 1e-4);
     EXPECT_EQ(gn.inliers, ceres.inliers);
   }
 }

@@ -134,10 +134,10 @@ class PoseLm {
   // Cost, IRLS-weighted normal equations H and gradient g (of the Gauss-Newton model cost + 2 g'd + d'Hd).
   double Linearize(const Eigen::Matrix3d& r, const Eigen::Vector3d& t, Eigen::Matrix6d& h,
                    Eigen::Vector6d& g) const {
-    h.setZero();
-    g.setZero();
+    // The upper triangle of H, row by row (21 entries), and g, accumulated in plain arrays: Eigen's
+    // generic outer product does not inline here and costs twice as much.
+    double hu[21] = {}, gg[6] = {};
     double cost = 0.0, e[3] = {0.0, 0.0, 0.0};
-    Eigen::Vector6d j;
     for (size_t i = 0; i < ms_.size(); ++i) {
       if (!active_[i]) continue;
       const Measurement& m = ms_[i];
@@ -154,63 +154,73 @@ class PoseLm {
       }
       const double iz = 1.0 / p.z();
       const double s = m.sqrt_info * iz;
-      // Row of de/dp, then J = [a, p x a].
-      auto add_row = [&](const Eigen::Vector3d& a, double err) {
-        j.head<3>() = a;
-        j.tail<3>() = p.cross(a);
-        h.noalias() += (w * j) * j.transpose();
-        g.noalias() += (w * err) * j;
+      // A row a of de/dp gives the Jacobian row [a, p x a].
+      auto add_row = [&](double ax, double ay, double az, double err) {
+        const double j[6] = {
+            ax, ay, az, p.y() * az - p.z() * ay, p.z() * ax - p.x() * az, p.x() * ay - p.y() * ax};
+        int k = 0;
+        for (int u = 0; u < 6; ++u) {
+          const double wj = w * j[u];
+          gg[u] += wj * err;
+          for (int v = u; v < 6; ++v) hu[k++] += wj * j[v];
+        }
       };
-      add_row(Eigen::Vector3d(s * k_.fx, 0.0, -s * k_.fx * p.x() * iz), e[0]);
-      add_row(Eigen::Vector3d(0.0, s * k_.fy, -s * k_.fy * p.y() * iz), e[1]);
-      if (m.stereo) add_row(Eigen::Vector3d(s * k_.fx, 0.0, -s * (k_.fx * p.x() - k_.bf) * iz), e[2]);
+      add_row(s * k_.fx, 0.0, -s * k_.fx * p.x() * iz, e[0]);
+      add_row(0.0, s * k_.fy, -s * k_.fy * p.y() * iz, e[1]);
+      if (m.stereo) add_row(s * k_.fx, 0.0, -s * (k_.fx * p.x() - k_.bf) * iz, e[2]);
+    }
+    int k = 0;
+    for (int u = 0; u < 6; ++u) {
+      g(u) = gg[u];
+      for (int v = u; v < 6; ++v) h(u, v) = h(v, u) = hu[k++];
     }
     return cost;
   }
 
+  // At most `iterations` Levenberg-Marquardt steps (damping update of Nielsen); stops early once a step
+  // gains less than a relative 1e-7 of the cost or the model promises less than that.
   void Run(Eigen::Matrix3d& r, Eigen::Vector3d& t, int iterations) const {
+    constexpr double kTolerance = 1e-7;
     Eigen::Matrix6d h;
     Eigen::Vector6d g;
     double cost = Linearize(r, t, h, g);
     if (!std::isfinite(cost)) return;
-    double lambda = -1.0, nu = 2.0;
+    double lambda = 1e-5 * std::max(h.diagonal().maxCoeff(), 1e-12), nu = 2.0;
     for (int it = 0; it < iterations; ++it) {
-      if (lambda < 0) lambda = 1e-5 * std::max(h.diagonal().maxCoeff(), 1e-12);
       bool accepted = false;
-      Eigen::Vector6d delta;
-      for (int attempt = 0; attempt < 8 && !accepted; ++attempt) {
+      for (int attempt = 0; attempt < 10 && !accepted; ++attempt) {
         Eigen::Matrix6d a = h;
         a.diagonal().array() += lambda;
-        delta = a.ldlt().solve(-g);
-        if (!delta.allFinite()) {
+        const Eigen::Vector6d delta = a.ldlt().solve(-g);
+        const double predicted = delta.dot(lambda * delta - g);
+        if (!delta.allFinite() || !(predicted > 0)) {
           lambda *= nu;
           nu *= 2.0;
           continue;
         }
-        const Eigen::Quaterniond dq = QuaternionExp(delta.tail<3>());
-        const Eigen::Matrix3d dr = dq.toRotationMatrix();
+        if (predicted <= kTolerance * cost) return;  // nothing left to gain
+        const Eigen::Matrix3d dr = QuaternionExp(delta.tail<3>()).toRotationMatrix();
         const Eigen::Matrix3d r_new = dr * r;
         const Eigen::Vector3d t_new = dr * t + delta.head<3>();
         const double cost_new = Cost(r_new, t_new);
-        const double predicted = delta.dot(lambda * delta - g);
-        if (cost_new < cost && predicted > 0) {
+        if (cost_new < cost) {
           const double rho = (cost - cost_new) / predicted;
           lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
           nu = 2.0;
-          r = r_new;
+          r = Eigen::Quaterniond(r_new).normalized().toRotationMatrix();  // keep R orthonormal
           t = t_new;
           accepted = true;
+          if (cost - cost_new <= kTolerance * cost) return;
         } else {
           lambda *= nu;
           nu *= 2.0;
         }
       }
-      if (!accepted) return;  // no descent from here: converged (or stuck) for this round
-      // Re-orthonormalize the rotation now and then against drift from repeated products.
-      r = Eigen::Quaterniond(r).normalized().toRotationMatrix();
-      if (delta.squaredNorm() < 1e-20) return;
-      cost = Linearize(r, t, h, g);
-      if (!std::isfinite(cost)) return;
+      if (!accepted) return;  // no descent from here
+      if (it + 1 < iterations) {
+        cost = Linearize(r, t, h, g);
+        if (!std::isfinite(cost)) return;
+      }
     }
   }
 
