@@ -102,7 +102,7 @@ class AbortCallback final : public ceres::IterationCallback {
 };
 
 void Validate(const BundleAdjustmentProblem& problem) {
-  optim_internal::RequirePinhole(problem.camera, "bundle adjustment");
+  if (!problem.observations.empty()) optim_internal::RequirePinhole(problem.camera, "bundle adjustment");
   Require(std::isfinite(problem.baseline) && problem.baseline >= 0,
           "bundle adjustment: baseline must be finite and >= 0");
   Require(problem.pose_fixed.size() == problem.camera_from_world.size(),
