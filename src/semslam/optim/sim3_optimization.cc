@@ -210,8 +210,10 @@ Sim3RefinementResult OptimizeSim3(const Sim3RefinementProblem& problem,
   current = optim_internal::UnpackSim3(x);
 
   result.camera1_from_camera2 = current;
+  // Every match is judged by the final transform: one dropped after a first pass that had not yet converged
+  // counts again when it fits.
   for (size_t i = 0; i < n; ++i) {
-    const bool in = ids[i].first != nullptr && IsInlier(problem, problem.matches[i], current, chi2_threshold);
+    const bool in = IsInlier(problem, problem.matches[i], current, chi2_threshold);
     result.inliers[i] = in;
     result.num_inliers += in ? 1 : 0;
   }

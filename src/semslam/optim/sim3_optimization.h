@@ -27,15 +27,18 @@ struct Sim3RefinementProblem {
 };
 
 struct Sim3RefinementOptions {
-  int iterations = 5;          // first pass, under the Huber kernel
-  int refine_iterations = 10;  // second pass without the dropped matches (5 when none were dropped)
+  int iterations = 10;  // first pass, under the Huber kernel (ORB-SLAM: 5, from a RANSAC estimate)
+  int refine_iterations =
+      10;  // second pass without the dropped matches (`iterations` when none were dropped)
 
   void Check() const;  // throws InvalidArgument
 };
 
 struct Sim3RefinementResult {
   Sim3d camera1_from_camera2;
-  std::vector<bool> inliers;  // per match: both reprojections within chi2_threshold, in front of both cameras
+  // Per match, under the final transform: both reprojections within chi2_threshold, in front of both
+  // cameras (a match dropped after the first pass counts again if it fits the final transform).
+  std::vector<bool> inliers;
   int num_inliers = 0;
 };
 
