@@ -145,6 +145,7 @@ void BM_LocalBundleAdjustment(benchmark::State& state) {
   options.refine_without_outliers = true;
   options.refine_iterations = 10;
   options.solver = static_cast<BundleAdjustmentSolver>(state.range(0));
+  options.num_threads = static_cast<int>(state.range(2));
   BundleAdjustmentResult result;
   for (auto _ : state) {
     state.PauseTiming();
@@ -160,11 +161,12 @@ void BM_LocalBundleAdjustment(benchmark::State& state) {
   state.counters["final_rms"] = result.final_rms;
 }
 BENCHMARK(BM_LocalBundleAdjustment)
-    ->ArgNames({"solver", "stereo"})  // solver: 1 dense Schur, 2 sparse Schur, 3 iterative Schur
-    ->Args({static_cast<int>(BundleAdjustmentSolver::kDenseSchur), 0})
-    ->Args({static_cast<int>(BundleAdjustmentSolver::kSparseSchur), 0})
-    ->Args({static_cast<int>(BundleAdjustmentSolver::kIterativeSchur), 0})
-    ->Args({static_cast<int>(BundleAdjustmentSolver::kDenseSchur), 1})
+    ->ArgNames({"solver", "stereo", "threads"})  // solver: 1 dense Schur, 2 sparse Schur, 3 iterative Schur
+    ->Args({static_cast<int>(BundleAdjustmentSolver::kDenseSchur), 0, 1})
+    ->Args({static_cast<int>(BundleAdjustmentSolver::kSparseSchur), 0, 1})
+    ->Args({static_cast<int>(BundleAdjustmentSolver::kIterativeSchur), 0, 1})
+    ->Args({static_cast<int>(BundleAdjustmentSolver::kDenseSchur), 1, 1})
+    ->Args({static_cast<int>(BundleAdjustmentSolver::kDenseSchur), 0, 2})
     ->Unit(benchmark::kMillisecond);
 
 // The essential graph after a loop of 1000 keyframes: spanning tree (odometry with 1 %/step scale drift),
