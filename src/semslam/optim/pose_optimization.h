@@ -27,7 +27,7 @@ struct PoseOptimizationProblem {
 };
 
 enum class PoseSolver {
-  kGaussNewton,  // hand-written 6-DoF Levenberg-Marquardt (the default: ~10x faster than Ceres for this size)
+  kGaussNewton,  // hand-written 6-DoF Levenberg-Marquardt (the default: ~5x faster than Ceres per call)
   kCeres,        // the same optimization through Ceres (reference; slower per call)
 };
 
