@@ -13,9 +13,11 @@
 namespace semslam {
 
 struct KittiCalibration {
-  std::array<Eigen::Matrix3x4d, 4> projection{};  // P0..P3; rows missing from the file stay zero
-  int num_projections = 0;                         // how many P rows the file had (at least 1)
-  std::optional<Eigen::Matrix3x4d> velo_to_cam;    // "Tr", when present
+  // P0..P3; rows missing from the file stay zero.
+  std::array<Eigen::Matrix3x4d, 4> projection{Eigen::Matrix3x4d::Zero(), Eigen::Matrix3x4d::Zero(),
+                                              Eigen::Matrix3x4d::Zero(), Eigen::Matrix3x4d::Zero()};
+  int num_projections = 0;                       // how many P rows the file had (at least 1)
+  std::optional<Eigen::Matrix3x4d> velo_to_cam;  // "Tr", when present
 
   // Left grey camera (P0) at the given image size.
   PinholeCamera Camera0(int width, int height) const;

@@ -5,23 +5,25 @@
 #include <array>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/eigen_types.h"
 #include "semslam/geometry/rigid3.h"
+#include "semslam/io/sequence.h"
 
 namespace semslam {
 
 // One OXTS reading, in the field order of KITTI's dataformat.txt.
 struct OxtsRecord {
-  double lat = 0, lon = 0, alt = 0;           // deg, deg, m
-  double roll = 0, pitch = 0, yaw = 0;        // rad
-  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;  // m/s (north, east, forward, left, up)
+  double lat = 0, lon = 0, alt = 0;                       // deg, deg, m
+  double roll = 0, pitch = 0, yaw = 0;                    // rad
+  double vn = 0, ve = 0, vf = 0, vl = 0, vu = 0;          // m/s (north, east, forward, left, up)
   double ax = 0, ay = 0, az = 0, af = 0, al = 0, au = 0;  // m/s^2
   double wx = 0, wy = 0, wz = 0, wf = 0, wl = 0, wu = 0;  // rad/s
-  double pos_accuracy = 0, vel_accuracy = 0;  // m, m/s
+  double pos_accuracy = 0, vel_accuracy = 0;              // m, m/s
   int navstat = 0, numsats = 0, posmode = 0, velmode = 0, orimode = 0;
 
   static constexpr int kNumFields = 30;
@@ -43,16 +45,31 @@ struct StampedOxts {
 std::vector<StampedOxts> ReadOxtsFolder(const std::filesystem::path& oxts_dir);
 void WriteOxtsFolder(const std::filesystem::path& oxts_dir, const std::vector<StampedOxts>& readings);
 
-// calib_cam_to_cam.txt (K_0x, D_0x, R_0x, T_0x, S_rect_0x, R_rect_0x, P_rect_0x, ...): every key as its numbers.
+// calib_cam_to_cam.txt (K_0x, D_0x, R_0x, T_0x, S_rect_0x, R_rect_0x, P_rect_0x, ...): every key as its
+// numbers.
 struct KittiRawCalibFile {
   std::map<std::string, std::vector<double>> values;
   // The numbers under `key`, requiring exactly `count` of them; throws InputError naming the file and key.
   std::vector<double> Get(const std::string& key, size_t count) const;
   std::filesystem::path file;
+  std::map<std::string, int> lines;  // the line of each key, for error messages
 };
 KittiRawCalibFile ReadKittiRawCalibFile(const std::filesystem::path& path);
 
 // Rigid transforms from calib_imu_to_velo.txt / calib_velo_to_cam.txt (R: 9 numbers, T: 3).
 Rigid3d ReadKittiRawRigid(const std::filesystem::path& path);  // velo_from_imu or cam_from_velo
+
+// `file_name` (calib_cam_to_cam.txt, calib_imu_to_velo.txt, calib_velo_to_cam.txt) in the drive folder or its
+// parent (KITTI's date folder). Throws InputError naming both places when it is in neither.
+std::filesystem::path FindKittiRawCalibFile(const std::filesystem::path& drive_dir,
+                                            const std::string& file_name);
+// The rectified grey camera 0 from the OXTS (IMU) frame: R_rect_00 * cam0_from_velo * velo_from_imu.
+Rigid3d ReadKittiRawRectifiedCam0FromImu(const std::filesystem::path& drive_dir);
+
+// Opens a KITTI raw drive folder (<date>_drive_XXXX_sync/): image_00/data/%010d.png with
+// image_00/timestamps.txt (Unix seconds), stereo when image_01/data/ is there too; camera from P_rect_00 and
+// S_rect_00 (baseline from P_rect_01) of calib_cam_to_cam.txt. No ground truth (the OXTS poses are the geo
+// module's business).
+std::unique_ptr<ImageSequence> OpenKittiRaw(const std::filesystem::path& drive_dir);
 
 }  // namespace semslam

@@ -3,10 +3,9 @@
 
 #include <filesystem>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core/mat.hpp>
 
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/trajectory.h"

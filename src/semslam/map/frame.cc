@@ -26,9 +26,11 @@ std::shared_ptr<FrameData> MakeFrameData(const PinholeCamera& camera, const std:
     }
     const double w = camera.width - 1.0, h = camera.height - 1.0;
     auto undistort = [&](double u, double v) {
-      return (k * camera.PixelToNormalized({u, v}).homogeneous()).hnormalized();
+      const Eigen::Vector2d pixel(u, v);
+      return Eigen::Vector2d((k * camera.PixelToNormalized(pixel).homogeneous()).hnormalized());
     };
-    const Eigen::Vector2d tl = undistort(0, 0), tr = undistort(w, 0), bl = undistort(0, h), br = undistort(w, h);
+    const Eigen::Vector2d tl = undistort(0, 0), tr = undistort(w, 0), bl = undistort(0, h),
+                          br = undistort(w, h);
     data->min_x = static_cast<float>(std::min(tl.x(), bl.x()));
     data->max_x = static_cast<float>(std::max(tr.x(), br.x()));
     data->min_y = static_cast<float>(std::min(tl.y(), tr.y()));
@@ -42,11 +44,11 @@ std::shared_ptr<FrameData> MakeFrameData(const PinholeCamera& camera, const std:
 }
 
 Frame::Frame(std::uint64_t id, double timestamp, std::shared_ptr<const FrameData> data)
-    : id_(id),
-      timestamp_(timestamp),
-      data_(std::move(data)),
-      map_points(data_->features.size(), nullptr),
-      outliers(data_->features.size(), false) {}
+    : id_(id), timestamp_(timestamp), data_(std::move(data)) {
+  // Not in the initializer list: these members are declared before data_.
+  map_points.assign(data_->features.size(), nullptr);
+  outliers.assign(data_->features.size(), false);
+}
 
 void Frame::SetPose(const Rigid3d& camera_from_world) {
   camera_from_world_ = camera_from_world;

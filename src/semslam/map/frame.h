@@ -20,11 +20,11 @@ class KeyFrame;
 
 // What a frame measured; immutable once built and shared by the frame and its keyframe.
 struct FrameData {
-  PinholeCamera camera;               // ideal pinhole: keypoints are undistorted
+  PinholeCamera camera;  // ideal pinhole: keypoints are undistorted
   std::optional<StereoRig> stereo;
   FeatureSet features;
-  std::vector<float> right_u;         // stereo: u in the right image per keypoint, < 0 when unmatched
-  std::vector<float> depth;           // stereo: depth per keypoint, < 0 when unknown
+  std::vector<float> right_u;  // stereo: u in the right image per keypoint, < 0 when unmatched
+  std::vector<float> depth;    // stereo: depth per keypoint, < 0 when unknown
   FeatureGrid grid;
   // Bounds of the undistorted image (equal to the image for an undistorted camera).
   float min_x = 0, max_x = 0, min_y = 0, max_y = 0;

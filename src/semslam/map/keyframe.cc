@@ -59,7 +59,7 @@ std::set<MapPoint*> KeyFrame::GoodMapPoints() const {
 }
 
 void KeyFrame::UpdateConnections() {
-  std::map<KeyFrame*, int> counter;
+  std::map<KeyFrame*, int, ById> counter;
   for (const MapPoint* p : map_points_) {
     if (p == nullptr || p->is_bad()) continue;
     for (const auto& [other, index] : p->observations()) {
@@ -187,7 +187,7 @@ void KeyFrame::SetBad() {
 
   // Re-attach each child to the candidate parent (this one's parent or an already re-attached sibling)
   // it shares the most points with.
-  std::set<KeyFrame*> parent_candidates;
+  std::set<KeyFrame*, ById> parent_candidates;
   if (parent_ != nullptr) parent_candidates.insert(parent_);
   while (!children_.empty()) {
     KeyFrame* best_child = nullptr;
@@ -211,7 +211,7 @@ void KeyFrame::SetBad() {
     children_.erase(best_child);
   }
   // Children without covisibility to any candidate go to this keyframe's parent.
-  for (KeyFrame* child : std::set<KeyFrame*>(children_)) child->ChangeParent(parent_);
+  for (KeyFrame* child : std::set<KeyFrame*, ById>(children_)) child->ChangeParent(parent_);
   children_.clear();
   if (parent_ != nullptr) {
     parent_->children_.erase(this);

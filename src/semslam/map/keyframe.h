@@ -14,6 +14,7 @@
 #include "semslam/features/orb_types.h"
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/rigid3.h"
+#include "semslam/map/by_id.h"
 #include "semslam/map/frame.h"
 
 namespace semslam {
@@ -60,10 +61,10 @@ class KeyFrame {
 
   // Spanning tree (the strongest covisibility link to an older keyframe) and loop edges.
   KeyFrame* parent() const { return parent_; }
-  const std::set<KeyFrame*>& children() const { return children_; }
+  const std::set<KeyFrame*, ById>& children() const { return children_; }
   void ChangeParent(KeyFrame* parent);
   void AddLoopEdge(KeyFrame* other);
-  const std::set<KeyFrame*>& loop_edges() const { return loop_edges_; }
+  const std::set<KeyFrame*, ById>& loop_edges() const { return loop_edges_; }
 
   // Culling. A keyframe protected by the loop closer is erased only when released.
   bool is_bad() const { return bad_; }
@@ -124,13 +125,13 @@ class KeyFrame {
   Rigid3d world_from_camera_;
   std::vector<MapPoint*> map_points_;
 
-  std::map<KeyFrame*, int> connection_weights_;
+  std::map<KeyFrame*, int, ById> connection_weights_;
   std::vector<KeyFrame*> ordered_connections_;
   std::vector<int> ordered_weights_;
   bool first_connection_ = true;
   KeyFrame* parent_ = nullptr;
-  std::set<KeyFrame*> children_;
-  std::set<KeyFrame*> loop_edges_;
+  std::set<KeyFrame*, ById> children_;
+  std::set<KeyFrame*, ById> loop_edges_;
 
   bool bad_ = false;
   bool not_erase_ = false;

@@ -11,22 +11,16 @@
 #include <memory>
 #include <mutex>
 #include <set>
-#include <unordered_map>
 #include <shared_mutex>
+#include <unordered_map>
 #include <vector>
 
+#include "semslam/map/by_id.h"
 #include "semslam/map/frame.h"
 #include "semslam/map/keyframe.h"
 #include "semslam/map/map_point.h"
 
 namespace semslam {
-
-struct ById {
-  template <typename T>
-  bool operator()(const T* a, const T* b) const {
-    return a->id() < b->id();
-  }
-};
 
 class Map {
  public:
@@ -51,8 +45,8 @@ class Map {
   void Clear();
 
   // With a read lock held.
-  std::vector<KeyFrame*> KeyFrames() const;  // active, by id
-  std::vector<MapPoint*> MapPoints() const;  // active, by id
+  std::vector<KeyFrame*> KeyFrames() const;        // active, by id
+  std::vector<MapPoint*> MapPoints() const;        // active, by id
   KeyFrame* KeyFrameById(std::uint64_t id) const;  // active keyframe with this id, or nullptr
   size_t NumKeyFrames() const { return keyframes_.size(); }
   size_t NumMapPoints() const { return points_.size(); }

@@ -15,8 +15,12 @@ class MapSerializer {
   static std::unique_ptr<KeyFrame> ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
                                                 std::vector<std::uint64_t>* loop_ids);
   static void WritePoint(BinaryWriter& w, const MapPoint& p);
-  static void ReadPoint(BinaryReader& r, Map& map, const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes);
-  static void SetParent(KeyFrame* kf, KeyFrame* parent) { kf->ChangeParent(parent); kf->first_connection_ = false; }
+  static void ReadPoint(BinaryReader& r, Map& map,
+                        const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes);
+  static void SetParent(KeyFrame* kf, KeyFrame* parent) {
+    kf->ChangeParent(parent);
+    kf->first_connection_ = false;
+  }
   static void AddLoopEdge(KeyFrame* kf, KeyFrame* other) { kf->AddLoopEdge(other); }
 };
 
@@ -67,6 +71,32 @@ PinholeCamera ReadCamera(BinaryReader& r) {
   return c;
 }
 
+// Keypoint holds Eigen types (not trivially copyable): stored through a plain record.
+struct StoredKeypoint {
+  float x, y, angle_deg, response;
+  std::int32_t level;
+};
+
+void WriteKeypoints(BinaryWriter& w, const std::vector<Keypoint>& keypoints) {
+  std::vector<StoredKeypoint> stored;
+  stored.reserve(keypoints.size());
+  for (const Keypoint& kp : keypoints)
+    stored.push_back({kp.pixel.x(), kp.pixel.y(), kp.angle_deg, kp.response, kp.level});
+  w.PutVector(stored);
+}
+
+std::vector<Keypoint> ReadKeypoints(BinaryReader& r) {
+  const auto stored = r.GetVector<StoredKeypoint>();
+  std::vector<Keypoint> keypoints(stored.size());
+  for (size_t i = 0; i < stored.size(); ++i) {
+    keypoints[i].pixel = Eigen::Vector2f(stored[i].x, stored[i].y);
+    keypoints[i].angle_deg = stored[i].angle_deg;
+    keypoints[i].response = stored[i].response;
+    keypoints[i].level = stored[i].level;
+  }
+  return keypoints;
+}
+
 }  // namespace
 
 void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
@@ -81,7 +111,7 @@ void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
   w.Put<float>(d.features.pyramid.scale_factor);
   w.Put<std::int32_t>(d.features.image_width);
   w.Put<std::int32_t>(d.features.image_height);
-  w.PutVector(d.features.keypoints);
+  WriteKeypoints(w, d.features.keypoints);
   w.PutVector(d.features.descriptors);
   w.PutVector(d.right_u);
   w.PutVector(d.depth);
@@ -116,7 +146,7 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   features.pyramid = PyramidGeometry::Make(levels, scale_factor);
   features.image_width = r.Get<std::int32_t>();
   features.image_height = r.Get<std::int32_t>();
-  features.keypoints = r.GetVector<Keypoint>();
+  features.keypoints = ReadKeypoints(r);
   features.descriptors = r.GetVector<Descriptor>();
   auto right_u = r.GetVector<float>();
   auto depth = r.GetVector<float>();
@@ -226,8 +256,8 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
 MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
   const ChecksummedFile file = ReadChecksummedFile(path, kMagic);
   if (file.version != kMapFileVersion) {
-    throw InputError(path, fmt::format("map file version {} is not supported (this build reads {})", file.version,
-                                       kMapFileVersion));
+    throw InputError(path, fmt::format("map file version {} is not supported (this build reads {})",
+                                       file.version, kMapFileVersion));
   }
   Require(map.NumKeyFrames() == 0, "ReadMapFile needs an empty map");
   BinaryReader r(file.payload, path);
@@ -262,12 +292,14 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
     const auto& [parent, loops] = links[i];
     if (parent != kNone) {
       const auto it = by_id.find(parent);
-      if (it == by_id.end()) throw InputError(path, fmt::format("keyframe {}: parent {} missing", kf->id(), parent));
+      if (it == by_id.end())
+        throw InputError(path, fmt::format("keyframe {}: parent {} missing", kf->id(), parent));
       MapSerializer::SetParent(kf, it->second);
     }
     for (const auto loop : loops) {
       const auto it = by_id.find(loop);
-      if (it == by_id.end()) throw InputError(path, fmt::format("keyframe {}: loop edge to missing {}", kf->id(), loop));
+      if (it == by_id.end())
+        throw InputError(path, fmt::format("keyframe {}: loop edge to missing {}", kf->id(), loop));
       MapSerializer::AddLoopEdge(kf, it->second);
     }
   }

@@ -52,7 +52,8 @@ bool ProjectInto(const FrameData& data, const Sim3d& camera_from_world, const Ei
 
 }  // namespace
 
-int SearchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, float radius_factor, float nn_ratio) {
+int SearchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, float radius_factor,
+                      float nn_ratio) {
   const FrameData& data = frame.data();
   const auto& pyramid = data.features.pyramid;
   int matches = 0;
@@ -84,7 +85,8 @@ int SearchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, float 
       }
     }
     if (best > kHigh) continue;
-    if (best_level == second_level && static_cast<float>(best) > nn_ratio * static_cast<float>(second)) continue;
+    if (best_level == second_level && static_cast<float>(best) > nn_ratio * static_cast<float>(second))
+      continue;
     frame.map_points[static_cast<size_t>(best_index)] = p;
     ++matches;
   }
@@ -171,7 +173,8 @@ int SearchFromKeyFrame(Frame& frame, const KeyFrame& keyframe, const std::set<Ma
     int best = 256, best_index = -1;
     for (const auto index : candidates) {
       if (frame.map_points[static_cast<size_t>(index)] != nullptr) continue;
-      const int dist = HammingDistance(p->descriptor(), data.features.descriptors[static_cast<size_t>(index)]);
+      const int dist =
+          HammingDistance(p->descriptor(), data.features.descriptors[static_cast<size_t>(index)]);
       if (dist < best) {
         best = dist;
         best_index = static_cast<int>(index);
@@ -197,31 +200,32 @@ int SearchByBow(const KeyFrame& keyframe, const Frame& frame, std::vector<MapPoi
   const auto& f_features = frame.features();
   RotationHistogram histogram;
   int count = 0;
-  ForEachSharedNode(keyframe.feature_vector, frame.feature_vector, [&](const auto& kf_indices, const auto& f_indices) {
-    for (const auto kf_index : kf_indices) {
-      MapPoint* p = keyframe.map_point(static_cast<int>(kf_index));
-      if (p == nullptr || p->is_bad()) continue;
-      const Descriptor& d = kf_features.descriptors[static_cast<size_t>(kf_index)];
-      int best = 256, second = 256, best_index = -1;
-      for (const auto f_index : f_indices) {
-        if (matches[static_cast<size_t>(f_index)] != nullptr) continue;
-        const int dist = HammingDistance(d, f_features.descriptors[static_cast<size_t>(f_index)]);
-        if (dist < best) {
-          second = best;
-          best = dist;
-          best_index = static_cast<int>(f_index);
-        } else if (dist < second) {
-          second = dist;
+  ForEachSharedNode(
+      keyframe.feature_vector, frame.feature_vector, [&](const auto& kf_indices, const auto& f_indices) {
+        for (const auto kf_index : kf_indices) {
+          MapPoint* p = keyframe.map_point(static_cast<int>(kf_index));
+          if (p == nullptr || p->is_bad()) continue;
+          const Descriptor& d = kf_features.descriptors[static_cast<size_t>(kf_index)];
+          int best = 256, second = 256, best_index = -1;
+          for (const auto f_index : f_indices) {
+            if (matches[static_cast<size_t>(f_index)] != nullptr) continue;
+            const int dist = HammingDistance(d, f_features.descriptors[static_cast<size_t>(f_index)]);
+            if (dist < best) {
+              second = best;
+              best = dist;
+              best_index = static_cast<int>(f_index);
+            } else if (dist < second) {
+              second = dist;
+            }
+          }
+          if (best > kLow || static_cast<float>(best) >= nn_ratio * static_cast<float>(second)) continue;
+          matches[static_cast<size_t>(best_index)] = p;
+          ++count;
+          histogram.Add(kf_features.keypoints[static_cast<size_t>(kf_index)].angle_deg -
+                            f_features.keypoints[static_cast<size_t>(best_index)].angle_deg,
+                        best_index);
         }
-      }
-      if (best > kLow || static_cast<float>(best) >= nn_ratio * static_cast<float>(second)) continue;
-      matches[static_cast<size_t>(best_index)] = p;
-      ++count;
-      histogram.Add(kf_features.keypoints[static_cast<size_t>(kf_index)].angle_deg -
-                        f_features.keypoints[static_cast<size_t>(best_index)].angle_deg,
-                    best_index);
-    }
-  });
+      });
   if (check_orientation) {
     for (const int index : histogram.Inconsistent()) {
       matches[static_cast<size_t>(index)] = nullptr;
@@ -246,7 +250,8 @@ int SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
       for (const auto i2 : indices2) {
         MapPoint* p2 = kf2.map_point(static_cast<int>(i2));
         if (matched2[static_cast<size_t>(i2)] || p2 == nullptr || p2->is_bad()) continue;
-        const int dist = HammingDistance(f1.descriptors[static_cast<size_t>(i1)], f2.descriptors[static_cast<size_t>(i2)]);
+        const int dist =
+            HammingDistance(f1.descriptors[static_cast<size_t>(i1)], f2.descriptors[static_cast<size_t>(i2)]);
         if (dist < best) {
           second = best;
           best = dist;
@@ -259,7 +264,8 @@ int SearchByBow(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>
       matches12[static_cast<size_t>(i1)] = kf2.map_point(best_index);
       matched2[static_cast<size_t>(best_index)] = true;
       ++count;
-      histogram.Add(f1.keypoints[static_cast<size_t>(i1)].angle_deg - f2.keypoints[static_cast<size_t>(best_index)].angle_deg,
+      histogram.Add(f1.keypoints[static_cast<size_t>(i1)].angle_deg -
+                        f2.keypoints[static_cast<size_t>(best_index)].angle_deg,
                     static_cast<int>(i1));
     }
   });
@@ -394,8 +400,8 @@ int Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, float radius)
   return fused;
 }
 
-int FuseWithSim3(const KeyFrame& keyframe, const Sim3d& camera_from_world, const std::vector<MapPoint*>& points,
-                 float radius, std::vector<MapPoint*>& replace) {
+int FuseWithSim3(const KeyFrame& keyframe, const Sim3d& camera_from_world,
+                 const std::vector<MapPoint*>& points, float radius, std::vector<MapPoint*>& replace) {
   replace.assign(points.size(), nullptr);
   const Eigen::Vector3d center = camera_from_world.Inverse().translation;
   int fused = 0;
@@ -412,7 +418,8 @@ int FuseWithSim3(const KeyFrame& keyframe, const Sim3d& camera_from_world, const
 }
 
 int SearchBySim3Projection(const KeyFrame& keyframe, const Sim3d& camera_from_world,
-                           const std::vector<MapPoint*>& points, std::vector<MapPoint*>& matched, int radius) {
+                           const std::vector<MapPoint*>& points, std::vector<MapPoint*>& matched,
+                           int radius) {
   const FrameData& data = keyframe.data();
   const auto& pyramid = data.features.pyramid;
   const Eigen::Vector3d center = camera_from_world.Inverse().translation;
@@ -485,7 +492,8 @@ int SearchBySim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*
       for (const auto index : candidates) {
         const int kp_level = data.features.keypoints[static_cast<size_t>(index)].level;
         if (kp_level < level - 1 || kp_level > level) continue;
-        const int dist = HammingDistance(p->descriptor(), data.features.descriptors[static_cast<size_t>(index)]);
+        const int dist =
+            HammingDistance(p->descriptor(), data.features.descriptors[static_cast<size_t>(index)]);
         if (dist < best) {
           best = dist;
           best_index = static_cast<int>(index);

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "semslam/features/matching.h"
 #include "semslam/geometry/sim3.h"
 #include "semslam/map/frame.h"
 #include "semslam/map/keyframe.h"
@@ -14,14 +15,10 @@
 
 namespace semslam {
 
-struct MatcherThresholds {
-  static constexpr int kHigh = 100;  // Hamming distance accepted for projection matches
-  static constexpr int kLow = 50;    // stricter, for matches without a geometric prior
-};
-
 // Local-map tracking: matches points whose projection was prepared in their track_* scratch fields.
 // `radius_factor` widens the search (e.g. right after relocalization). Returns new matches.
-int SearchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, float radius_factor, float nn_ratio = 0.8f);
+int SearchLocalPoints(Frame& frame, const std::vector<MapPoint*>& points, float radius_factor,
+                      float nn_ratio = 0.8f);
 
 // Motion-model tracking: projects the last frame's matched points into `current` (which has a predicted
 // pose). `radius` in pixels at level 0. Returns matches.
@@ -48,8 +45,8 @@ std::vector<std::pair<int, int>> SearchForTriangulation(const KeyFrame& kf1, con
 int Fuse(KeyFrame* keyframe, const std::vector<MapPoint*>& points, float radius = 3.0f);
 // Loop fusion: projects with the corrected similarity `camera_from_world`; where the keypoint already has a
 // point, `replace[i]` gets it (the caller replaces it by points[i] under the lock). Read lock suffices.
-int FuseWithSim3(const KeyFrame& keyframe, const Sim3d& camera_from_world, const std::vector<MapPoint*>& points,
-                 float radius, std::vector<MapPoint*>& replace);
+int FuseWithSim3(const KeyFrame& keyframe, const Sim3d& camera_from_world,
+                 const std::vector<MapPoint*>& points, float radius, std::vector<MapPoint*>& replace);
 
 // Loop closing: projects `points` into `keyframe` with a similarity pose and adds matches to `matched`
 // (one slot per keyframe keypoint, existing entries kept).

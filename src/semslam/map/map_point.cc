@@ -24,12 +24,14 @@ void MapPoint::EraseObservation(KeyFrame* keyframe) {
   if (it == observations_.end()) return;
   num_observations_ -= keyframe->data().HasDepth(it->second) ? 2 : 1;
   observations_.erase(it);
-  if (reference_keyframe_ == keyframe && !observations_.empty()) reference_keyframe_ = observations_.begin()->first;
+  if (reference_keyframe_ == keyframe && !observations_.empty())
+    reference_keyframe_ = observations_.begin()->first;
   // Two cameras are the minimum for a point to stay constrained.
   if (num_observations_ <= 2) SetBad();
 }
 
 int MapPoint::IndexIn(const KeyFrame* keyframe) const {
+  if (keyframe == nullptr) return -1;
   const auto it = observations_.find(const_cast<KeyFrame*>(keyframe));
   return it == observations_.end() ? -1 : it->second;
 }
@@ -85,7 +87,8 @@ void MapPoint::UpdateDescriptor() {
   std::vector<const Descriptor*> descriptors;
   descriptors.reserve(observations_.size());
   for (const auto& [keyframe, index] : observations_) {
-    if (!keyframe->is_bad()) descriptors.push_back(&keyframe->features().descriptors[static_cast<size_t>(index)]);
+    if (!keyframe->is_bad())
+      descriptors.push_back(&keyframe->features().descriptors[static_cast<size_t>(index)]);
   }
   if (descriptors.empty()) return;
   const size_t n = descriptors.size();
@@ -99,8 +102,8 @@ void MapPoint::UpdateDescriptor() {
   size_t best = 0;
   std::vector<int> row(n);
   for (size_t i = 0; i < n; ++i) {
-    std::copy(distances.begin() + static_cast<long>(i * n), distances.begin() + static_cast<long>((i + 1) * n),
-              row.begin());
+    std::copy(distances.begin() + static_cast<long>(i * n),
+              distances.begin() + static_cast<long>((i + 1) * n), row.begin());
     std::nth_element(row.begin(), row.begin() + static_cast<long>((n - 1) / 2), row.end());
     const int median = row[(n - 1) / 2];
     if (median < best_median) {

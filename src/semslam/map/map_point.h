@@ -12,6 +12,7 @@
 
 #include "semslam/features/orb_types.h"
 #include "semslam/geometry/eigen_types.h"
+#include "semslam/map/by_id.h"
 
 namespace semslam {
 
@@ -32,7 +33,7 @@ class MapPoint {
   KeyFrame* reference_keyframe() const { return reference_keyframe_; }
 
   // Observations: keyframe -> keypoint index in that keyframe.
-  const std::map<KeyFrame*, int>& observations() const { return observations_; }
+  const std::map<KeyFrame*, int, ById>& observations() const { return observations_; }
   // Number of observing cameras (a stereo observation counts twice, as in the literature).
   int num_observations() const { return num_observations_; }
   void AddObservation(KeyFrame* keyframe, int keypoint_index);
@@ -99,7 +100,7 @@ class MapPoint {
   float min_distance_ = 0.0f;
   float max_distance_ = 0.0f;
   KeyFrame* reference_keyframe_;
-  std::map<KeyFrame*, int> observations_;
+  std::map<KeyFrame*, int, ById> observations_;
   int num_observations_ = 0;
   std::atomic<int> visible_{1};
   std::atomic<int> found_{1};

@@ -1,1 +1,0 @@
-// Replaced as the eval module is implemented.

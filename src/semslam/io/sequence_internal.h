@@ -1,0 +1,47 @@
+#pragma once
+// Shared by the sequence readers of this module (not part of its interface): a sequence is a list of image
+// files with timestamps and a camera, whatever layout they came from.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "semslam/io/sequence.h"
+
+namespace semslam::io_internal {
+
+struct SequenceFiles {
+  std::string name;
+  std::filesystem::path directory;
+  std::vector<std::filesystem::path> left;
+  std::vector<std::filesystem::path> right;  // empty for a monocular sequence, else one per left image
+  std::vector<double> timestamps;            // one per left image
+  PinholeCamera camera;                      // width and height are set from the first left image
+  std::optional<double> baseline;            // metres, for a stereo sequence
+  std::optional<Trajectory> ground_truth;    // usually one pose per image (a TUM file may differ)
+  std::optional<std::filesystem::path> labels;
+  std::optional<std::filesystem::path> depth;
+};
+
+// Reads the first left image for the image size (and checks it against a size the calibration gave, when
+// camera.width/height are already set), checks the rest and builds the sequence.
+std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files);
+
+// "a/b/" and "a/b/." -> "a/b", made absolute.
+std::filesystem::path NormalizeDirectory(const std::filesystem::path& path);
+
+// Files of `dir` with one of the (lower-case, dotted) extensions, compared case-insensitively, in natural
+// order (digit runs compare as numbers: img2 < img10).
+std::vector<std::filesystem::path> ListFiles(const std::filesystem::path& dir,
+                                             const std::vector<std::string>& extensions);
+bool NaturalLess(const std::string& a, const std::string& b);
+
+// The files dir/<printf(pattern, i)> for i = 0..N-1, where N is the number of files in `dir` with the
+// pattern's extension; throws InputError naming the first missing one (a gap in the numbering) or when
+// `dir` holds none.
+std::vector<std::filesystem::path> NumberedFiles(const std::filesystem::path& dir, int digits,
+                                                 const std::string& extension);
+
+}  // namespace semslam::io_internal

@@ -1,0 +1,196 @@
+#include "semslam/io/trajectory_io.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <string>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/core/text_reader.h"
+
+namespace semslam {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A quaternion whose norm is further than this from 1 is an error (columns swapped, a wrong format);
+// smaller deviations (rounding in text files) are normalized away.
+constexpr double kQuaternionNormTolerance = 1e-2;
+// Largest |R^T R - I| entry accepted in a KITTI pose before it counts as "not a rotation".
+constexpr double kOrthonormalityTolerance = 1e-2;
+
+constexpr const char* kTumFields[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+constexpr const char* kKittiFields[12] = {"r00", "r01", "r02", "tx",  "r10", "r11",
+                                          "r12", "ty",  "r20", "r21", "r22", "tz"};
+
+bool IsDataLine(std::string_view line) {
+  const std::string_view trimmed = Trim(line);
+  return !trimmed.empty() && trimmed.front() != '#';
+}
+
+// Whitespace (and, for files written by other tools, commas) separate the columns.
+std::vector<std::string_view> Columns(std::string_view line) { return SplitTokens(line, " \t\r,"); }
+
+void RequireColumns(const std::vector<std::string_view>& tokens, size_t expected, const SourceLocation& where,
+                    std::string_view format) {
+  if (tokens.size() != expected) {
+    throw InputError(
+        where, "columns",
+        fmt::format("expected {} numbers per line ({}), found {}", expected, format, tokens.size()));
+  }
+}
+
+Rigid3d ParseKittiPose(const std::vector<std::string_view>& tokens, const SourceLocation& where) {
+  RequireColumns(tokens, 12, where, "KITTI pose: row-major 3x4 [R|t]");
+  Eigen::Matrix3x4d m;
+  for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = ParseDouble(tokens[i], where, kKittiFields[i]);
+  const Eigen::Matrix3d r = m.leftCols<3>();
+  const double deviation = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (deviation > kOrthonormalityTolerance) {
+    throw InputError(
+        where, "r00..r22",
+        fmt::format("rotation is not orthonormal (largest |R^T R - I| entry {:.3g})", deviation));
+  }
+  if (r.determinant() < 0) throw InputError(where, "r00..r22", "rotation has determinant -1 (a reflection)");
+  return Rigid3d::FromMatrix(m);
+}
+
+std::string FormatKittiPose(const Rigid3d& pose) {
+  const Eigen::Matrix3x4d m = pose.ToMatrix();
+  std::string line;
+  for (int i = 0; i < 12; ++i) {
+    if (i > 0) line += ' ';
+    line += fmt::format("{:.12e}", m(i / 4, i % 4));
+  }
+  line += '\n';
+  return line;
+}
+
+}  // namespace
+
+Trajectory ReadTumTrajectory(const fs::path& path) {
+  TextReader reader(path);
+  Trajectory trajectory;
+  while (const auto line = reader.NextLine()) {
+    if (!IsDataLine(*line)) continue;
+    const SourceLocation where = reader.Where();
+    const auto tokens = Columns(*line);
+    RequireColumns(tokens, 8, where, "TUM: timestamp tx ty tz qx qy qz qw");
+    double v[8];
+    for (int i = 0; i < 8; ++i) v[i] = ParseDouble(tokens[i], where, kTumFields[i]);
+    if (!trajectory.empty() && !(v[0] > trajectory.back().timestamp)) {
+      throw InputError(where, "timestamp",
+                       fmt::format("timestamps must increase: {} follows {}", tokens[0],
+                                   fmt::format("{:.9f}", trajectory.back().timestamp)));
+    }
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    const double norm = q.norm();
+    if (std::abs(norm - 1.0) > kQuaternionNormTolerance) {
+      throw InputError(where, "qx qy qz qw", fmt::format("quaternion has norm {:.6g}, expected 1", norm));
+    }
+    trajectory.push_back({v[0], Rigid3d(q.normalized(), Eigen::Vector3d(v[1], v[2], v[3]))});
+  }
+  return trajectory;
+}
+
+void WriteTumTrajectory(const fs::path& path, const Trajectory& trajectory) {
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  for (const StampedPose& pose : trajectory) {
+    const Eigen::Quaterniond& q = pose.world_from_camera.rotation;
+    const Eigen::Vector3d& t = pose.world_from_camera.translation;
+    text += fmt::format("{:.9f} {:.9f} {:.9f} {:.9f} {:.12f} {:.12f} {:.12f} {:.12f}\n", pose.timestamp,
+                        t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  }
+  WriteFileAtomically(path, text);
+}
+
+std::vector<Rigid3d> ReadKittiPoses(const fs::path& path) {
+  TextReader reader(path);
+  std::vector<Rigid3d> poses;
+  while (const auto line = reader.NextLine()) {
+    if (!IsDataLine(*line)) continue;
+    poses.push_back(ParseKittiPose(Columns(*line), reader.Where()));
+  }
+  return poses;
+}
+
+void WriteKittiPoses(const fs::path& path, const std::vector<Rigid3d>& world_from_camera) {
+  std::string text;
+  text.reserve(world_from_camera.size() * 12 * 20);
+  for (const Rigid3d& pose : world_from_camera) text += FormatKittiPose(pose);
+  WriteFileAtomically(path, text);
+}
+
+void WriteKittiPoses(const fs::path& path, const Trajectory& trajectory) {
+  std::string text;
+  text.reserve(trajectory.size() * 12 * 20);
+  for (const StampedPose& pose : trajectory) text += FormatKittiPose(pose.world_from_camera);
+  WriteFileAtomically(path, text);
+}
+
+std::vector<double> ReadTimes(const fs::path& path) {
+  TextReader reader(path);
+  std::vector<double> times;
+  while (const auto line = reader.NextLine()) {
+    if (!IsDataLine(*line)) continue;
+    const SourceLocation where = reader.Where();
+    const auto tokens = SplitTokens(*line);
+    if (tokens.size() != 1) {
+      throw InputError(where, "timestamp",
+                       fmt::format("expected one timestamp per line, found {} values", tokens.size()));
+    }
+    const double t = ParseDouble(tokens[0], where, "timestamp");
+    if (!times.empty() && !(t > times.back())) {
+      throw InputError(where, "timestamp",
+                       fmt::format("timestamps must increase: {} follows {:.9f}", tokens[0], times.back()));
+    }
+    times.push_back(t);
+  }
+  return times;
+}
+
+void WriteTimes(const fs::path& path, const std::vector<double>& timestamps) {
+  std::string text;
+  text.reserve(timestamps.size() * 24);
+  for (const double t : timestamps) text += fmt::format("{:.9f}\n", t);
+  WriteFileAtomically(path, text);
+}
+
+TrajectoryFormat DetectTrajectoryFormat(const fs::path& path) {
+  TextReader reader(path);
+  while (const auto line = reader.NextLine()) {
+    if (!IsDataLine(*line)) continue;
+    const size_t columns = Columns(*line).size();
+    if (columns == 8) return TrajectoryFormat::kTum;
+    if (columns == 12) return TrajectoryFormat::kKitti;
+    throw InputError(
+        reader.Where(), "columns",
+        fmt::format("found {} numbers; a trajectory line has 8 (TUM: timestamp tx ty tz qx qy qz qw) "
+                    "or 12 (KITTI: row-major 3x4 [R|t])",
+                    columns));
+  }
+  throw InputError(path, "no poses in the file: cannot tell TUM (8 columns) from KITTI (12 columns)");
+}
+
+Trajectory ReadTrajectory(const fs::path& path, const std::optional<fs::path>& times) {
+  if (DetectTrajectoryFormat(path) == TrajectoryFormat::kTum) return ReadTumTrajectory(path);
+  const std::vector<Rigid3d> poses = ReadKittiPoses(path);
+  std::vector<double> stamps;
+  if (times) {
+    stamps = ReadTimes(*times);
+    if (stamps.size() < poses.size()) {
+      throw InputError(*times, fmt::format("lists {} timestamps, fewer than the {} poses in {}",
+                                           stamps.size(), poses.size(), path.string()));
+    }
+  }
+  Trajectory trajectory;
+  trajectory.reserve(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    trajectory.push_back({times ? stamps[i] : static_cast<double>(i), poses[i]});
+  }
+  return trajectory;
+}
+
+}  // namespace semslam

@@ -1,1 +1,0 @@
-// Placeholder until the map module has sources.

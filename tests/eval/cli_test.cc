@@ -1,0 +1,150 @@
+// `semslam eval` end to end through the built binary.
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "semslam/io/trajectory_io.h"
+#include "support/test_support.h"
+
+namespace semslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+int RunSemslam(const std::string& args, const fs::path& out, const fs::path& err) {
+  const std::string command =
+      testing::SemslamBinary().string() + " " + args + " > " + out.string() + " 2> " + err.string();
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string Read(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+Trajectory Drive(int n) {
+  Trajectory t;
+  for (int i = 0; i < n; ++i) {
+    const double s = 1.5 * i;
+    t.push_back({0.1 * i, Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.01 * i, Eigen::Vector3d::UnitY())),
+                                  Eigen::Vector3d(10 * std::sin(s / 30), 0.2 * std::cos(s / 7), s))});
+  }
+  return t;
+}
+
+class EvalCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(testing::SemslamBinary())) GTEST_SKIP() << "semslam binary not built";
+  }
+  testing::TempDir dir_;
+  fs::path out_ = dir_ / "out.json";
+  fs::path err_ = dir_ / "err.txt";
+};
+
+TEST_F(EvalCli, PrintsJsonWithTheMetrics) {
+  const Trajectory truth = Drive(120);  // ~178 m
+  Trajectory estimate = truth;
+  for (auto& p : estimate) p.world_from_camera.translation += Eigen::Vector3d(0.3, 0.0, 0.4);
+  WriteTumTrajectory(dir_ / "truth.tum", truth);
+  WriteTumTrajectory(dir_ / "estimate.tum", estimate);
+  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "estimate.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string() + " --align none",
+                       out_, err_),
+            0)
+      << Read(err_);
+  const nlohmann::json j = nlohmann::json::parse(Read(out_));
+  EXPECT_NEAR(j.at("ate_rmse").get<double>(), 0.5, 1e-6);
+  EXPECT_NEAR(j.at("ate_max").get<double>(), 0.5, 1e-6);
+  EXPECT_EQ(j.at("alignment"), "none");
+  EXPECT_EQ(j.at("matched"), 120);
+  EXPECT_EQ(j.at("estimate_poses"), 120);
+  EXPECT_EQ(j.at("truth_poses"), 120);
+  EXPECT_DOUBLE_EQ(j.at("scale").get<double>(), 1.0);
+  EXPECT_GT(j.at("path_length_m").get<double>(), 150.0);
+  EXPECT_NEAR(j.at("rpe_trans_rmse_m").get<double>(), 0.0, 1e-6);
+  EXPECT_NEAR(j.at("kitti_trans_pct").get<double>(), 0.0, 1e-6);
+  ASSERT_TRUE(j.at("kitti_segments").is_array());
+  ASSERT_EQ(j.at("kitti_segments").size(), 1u);  // only 100 m fits
+  EXPECT_EQ(j.at("kitti_segments")[0].at("length_m"), 100.0);
+  for (const char* key : {"ate_mean", "ate_median", "ate_std", "rpe_rot_rmse_deg", "kitti_rot_deg_per_100m",
+                          "rpe_100m_trans_rmse_m"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+
+  // Sim(3) by default: a scaled copy has zero error and scale 1 / 2.
+  Trajectory scaled = truth;
+  for (auto& p : scaled) p.world_from_camera.translation *= 2.0;
+  WriteTumTrajectory(dir_ / "scaled.tum", scaled);
+  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "scaled.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string(),
+                       out_, err_),
+            0)
+      << Read(err_);
+  const nlohmann::json s = nlohmann::json::parse(Read(out_));
+  EXPECT_NEAR(s.at("ate_rmse").get<double>(), 0.0, 1e-6);
+  EXPECT_NEAR(s.at("scale").get<double>(), 0.5, 1e-9);
+}
+
+TEST_F(EvalCli, KittiPosesWithTimesAndShortPathsGiveNullKittiErrors) {
+  const Trajectory truth = Drive(40);  // ~58 m
+  WriteKittiPoses(dir_ / "truth.txt", truth);
+  WriteTumTrajectory(dir_ / "estimate.tum", truth);
+  std::vector<double> times;
+  for (int i = 0; i < 60; ++i) times.push_back(0.1 * i);
+  WriteTimes(dir_ / "times.txt", times);
+  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "estimate.tum").string() + " --truth " +
+                           (dir_ / "truth.txt").string() + " --times " + (dir_ / "times.txt").string() +
+                           " --align se3 --max-dt 0.001",
+                       out_, err_),
+            0)
+      << Read(err_);
+  const nlohmann::json j = nlohmann::json::parse(Read(out_));
+  EXPECT_EQ(j.at("matched"), 40);
+  EXPECT_TRUE(j.at("kitti_trans_pct").is_null());
+  EXPECT_TRUE(j.at("kitti_rot_deg_per_100m").is_null());
+  EXPECT_TRUE(j.at("rpe_100m_trans_rmse_m").is_null());
+  EXPECT_EQ(j.at("kitti_segments").size(), 0u);
+}
+
+TEST_F(EvalCli, ErrorsExitNonZeroWithOneLine) {
+  WriteTumTrajectory(dir_ / "truth.tum", Drive(10));
+  std::ofstream(dir_ / "bad.tum") << "# header\n0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 1\n";
+  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "bad.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string(),
+                       out_, err_),
+            1);
+  std::string err = Read(err_);
+  EXPECT_NE(err.find("bad.tum:3"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+
+  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "missing.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string(),
+                       out_, err_),
+            1);
+  err = Read(err_);
+  EXPECT_NE(err.find("missing.tum"), std::string::npos) << err;
+
+  Trajectory late = Drive(10);
+  for (auto& p : late) p.timestamp += 500;
+  WriteTumTrajectory(dir_ / "late.tum", late);
+  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "late.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string(),
+                       out_, err_),
+            1);
+  err = Read(err_);
+  EXPECT_NE(err.find("no estimated pose matched"), std::string::npos) << err;
+  EXPECT_TRUE(Read(out_).empty());
+
+  EXPECT_NE(RunSemslam("eval --estimate " + (dir_ / "late.tum").string() + " --truth " +
+                           (dir_ / "truth.tum").string() + " --align affine",
+                       out_, err_),
+            0);
+}
+
+}  // namespace
+}  // namespace semslam
