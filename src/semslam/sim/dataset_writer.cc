@@ -269,7 +269,7 @@ std::string SceneJson(const SyntheticCity& sim) {
         "world-frame bounds; cylinders are vertical (along world_up) and ellipsoids inscribed in them";
     j["surfaces"] = std::move(surfaces);
   }
-  return j.dump(1) + "\n";
+  return j.dump() + "\n";
 }
 
 std::string LandmarksCsv(const SyntheticCity& sim) {

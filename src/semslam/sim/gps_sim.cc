@@ -5,6 +5,13 @@
 #include "semslam/sim/random.h"
 
 namespace semslam::sim {
+namespace {
+// Rounds away the numerical dust of the path smoothing (1e-12 m/s is no measurement).
+double Clean(double v, double scale = 1e6) {
+  const double r = std::round(v * scale) / scale;
+  return r == 0.0 ? 0.0 : r;
+}
+}  // namespace
 
 std::vector<StampedOxts> SimulateOxts(const SyntheticCity& sim) {
   const GpsOptions& gps = sim.options().gps;
@@ -29,21 +36,21 @@ std::vector<StampedOxts> SimulateOxts(const SyntheticCity& sim) {
     r.alt = position.altitude_m;
     r.roll = 0.0;
     r.pitch = 0.0;
-    r.yaw = route.yaw[f];  // 0 = east, counter-clockwise positive
+    r.yaw = Clean(route.yaw[f], 1e12);  // 0 = east, counter-clockwise positive
     const double v = route.speed[f];
-    r.ve = v * std::cos(route.yaw[f]);
-    r.vn = v * std::sin(route.yaw[f]);
-    r.vf = v;
+    r.ve = Clean(v * std::cos(route.yaw[f]));
+    r.vn = Clean(v * std::sin(route.yaw[f]));
+    r.vf = Clean(v);
     r.vl = 0.0;
     r.vu = 0.0;
     constexpr double kGravity = 9.81;
-    const double lateral = v * route.yaw_rate[f];  // centripetal, towards the left in a left turn
-    r.ax = r.af = route.acceleration[f];
+    const double lateral = Clean(v * route.yaw_rate[f]);  // centripetal, towards the left in a left turn
+    r.ax = r.af = Clean(route.acceleration[f]);
     r.ay = r.al = lateral;
     r.az = r.au = kGravity;
     r.wx = r.wf = 0.0;
     r.wy = r.wl = 0.0;
-    r.wz = r.wu = route.yaw_rate[f];
+    r.wz = r.wu = Clean(route.yaw_rate[f], 1e8);
     r.pos_accuracy = gps.noise;
     r.vel_accuracy = 0.05;
     r.navstat = 4;

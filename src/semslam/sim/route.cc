@@ -263,7 +263,12 @@ Route PlanRoute(const City& city, const RouteOptions& options) {
   // Speed profile: a cruise speed per street, the lateral acceleration limit in turns, limited acceleration.
   std::vector<double> cruise(seq.size());
   const double cruise_lo = std::min(std::max(options.min_speed, 10.0), options.max_speed);
-  for (double& c : cruise) c = rng.Uniform(cruise_lo, options.max_speed);
+  // One stream per street of the drive: a longer drive starts exactly as a shorter one.
+  const std::uint64_t route_seed = options.seed != 0 ? options.seed : city.options.seed;
+  for (size_t k = 0; k < cruise.size(); ++k) {
+    Rng street = Rng::Stream(route_seed, Hash3(12, k, options.reverse ? 1 : 0));
+    cruise[k] = street.Uniform(cruise_lo, options.max_speed);
+  }
   std::vector<double> v(count);
   for (size_t i = 0; i < count; ++i) {
     const double k = std::abs(curvature[i]);
