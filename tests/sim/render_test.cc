@@ -87,6 +87,29 @@ TEST(Render, DeterministicOnAnyNumberOfThreads) {
   EXPECT_GT(cv::norm(a.left, other.Render(37, kRenderLeft).left, cv::NORM_L1) / a.left.total(), 10.0);
 }
 
+TEST(Render, ColumnCastingMatchesOneRayPerPixel) {
+  const SyntheticCity& sim = HalfCity();
+  SynthOptions per_ray_options = HalfSize();
+  per_ray_options.render.column_casting = false;
+  const SyntheticCity per_ray(per_ray_options);
+  for (const size_t frame : {10u, 115u, 300u}) {
+    const RenderedFrame a = sim.Render(frame, kRenderLeft | kRenderLabels | kRenderDepth);
+    const RenderedFrame b = per_ray.Render(frame, kRenderLeft | kRenderLabels | kRenderDepth);
+    int same_label = 0, close_depth = 0, close_grey = 0;
+    const int total = static_cast<int>(a.labels.total());
+    for (int v = 0; v < a.labels.rows; ++v) {
+      for (int u = 0; u < a.labels.cols; ++u) {
+        same_label += a.labels.at<std::uint8_t>(v, u) == b.labels.at<std::uint8_t>(v, u);
+        close_depth += std::abs(a.depth.at<std::uint16_t>(v, u) - b.depth.at<std::uint16_t>(v, u)) <= 2;
+        close_grey += std::abs(a.left.at<std::uint8_t>(v, u) - b.left.at<std::uint8_t>(v, u)) <= 2;
+      }
+    }
+    EXPECT_GT(same_label, total - total / 500) << frame;
+    EXPECT_GT(close_depth, total - total / 200) << frame;
+    EXPECT_GT(close_grey, total - total / 100) << frame;
+  }
+}
+
 TEST(Render, LabelsAndDepthMatchTheScene) {
   const SyntheticCity& sim = HalfCity();
   const PinholeCamera& cam = sim.rig().left;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "semslam/core/error.h"
@@ -279,6 +280,248 @@ bool SceneIndex::Intersect(const Eigen::Vector3f& o, const Eigen::Vector3f& d, f
     return true;
   }
   return false;
+}
+
+void SceneIndex::CastColumn(const Eigen::Vector3f& o, const Eigen::Vector3f& horizontal, float yn0, float dyn,
+                            int rows, float max_distance, ColumnScratch* sc, ColumnHit* hits) const {
+  using Entry = ColumnScratch::Entry;
+  const float L = std::hypot(horizontal.x(), horizontal.y());
+  const Eigen::Vector2f h(horizontal.x() / L, horizontal.y() / L);
+  const float oz = o.z();
+  const float s_max = max_distance * L;
+  const size_t n = static_cast<size_t>(rows);
+  sc->slope.resize(n);
+  sc->best.resize(n);
+  sc->next.resize(n + 1);
+  sc->heap.clear();
+  if (sc->stamp.size() != city_.primitives.size()) {
+    sc->stamp.assign(city_.primitives.size(), 0u);
+    sc->column = 0;
+  }
+  const std::uint32_t column = ++sc->column;
+  std::vector<int>& next = sc->next;
+  std::vector<float>& best = sc->best;
+  std::vector<float>& slope = sc->slope;
+  int first_down = rows;  // first row looking below the horizon
+  for (int r = 0; r < rows; ++r) {
+    const float yn = yn0 + dyn * static_cast<float>(r);
+    slope[static_cast<size_t>(r)] = -yn / L;
+    next[static_cast<size_t>(r)] = r;
+    hits[r] = ColumnHit{};
+    best[static_cast<size_t>(r)] = kHuge;
+    if (yn > 0 && first_down == rows) first_down = r;
+    if (yn > 0) {
+      // The ground is the first candidate of every row looking down.
+      const float s_ground = oz / (yn / L);
+      if (s_ground <= s_max) {
+        best[static_cast<size_t>(r)] = s_ground;
+        hits[r].lambda = s_ground / L;
+        hits[r].primitive = -1;
+      }
+    }
+  }
+  next[n] = rows;
+  auto find = [&](int r) {
+    int root = r;
+    while (next[static_cast<size_t>(root)] != root) root = next[static_cast<size_t>(root)];
+    while (next[static_cast<size_t>(r)] != root) {
+      const int up = next[static_cast<size_t>(r)];
+      next[static_cast<size_t>(r)] = root;
+      r = up;
+    }
+    return root;
+  };
+  // Entries are visited in order of s_in: a row whose nearest hit is nearer than the current `front` is
+  // final.
+  float front = 0;
+  auto is_open = [&](int r) {
+    return next[static_cast<size_t>(r)] == r && best[static_cast<size_t>(r)] > front;
+  };
+  // No row that is not final can hit anything beyond this horizontal distance.
+  int up = first_down - 1, down = first_down;
+  auto stop_distance = [&]() {
+    while (up >= 0 && !is_open(up)) --up;
+    while (down < rows && !is_open(down)) ++down;
+    float limit = 0;
+    if (up >= 0) {
+      const float k = slope[static_cast<size_t>(up)];
+      limit = k > 1e-9f ? (top_ - oz) / k : s_max;
+    }
+    if (down < rows) limit = std::max(limit, best[static_cast<size_t>(down)]);
+    return std::min(limit, s_max);
+  };
+  const float row_scale = L / dyn;  // rows per unit of slope
+  auto process = [&](const Entry& e) {
+    const float s0 = std::max(e.s_in, 1e-4f);
+    if (e.s_out <= s0) return;
+    const float zl = e.z_lo - oz, zh = e.z_hi - oz;
+    const float k_hi = std::max(zh / s0, zh / e.s_out), k_lo = std::min(zl / s0, zl / e.s_out);
+    // slope = -(yn0 + dyn r) / L  <=>  r = (-slope L - yn0) / dyn
+    const int r0 = std::max(0, static_cast<int>(std::floor(-k_hi * row_scale - yn0 / dyn)) - 1);
+    const int r1 = std::min(rows - 1, static_cast<int>(std::ceil(-k_lo * row_scale - yn0 / dyn)) + 1);
+    if (r0 > r1) return;
+    const Primitive& p = city_.primitives[e.primitive];
+    for (int r = find(r0); r <= r1; r = find(r + 1)) {
+      if (best[static_cast<size_t>(r)] <= e.s_in) {
+        next[static_cast<size_t>(r)] = r + 1;  // final: nothing left starts before its hit
+        continue;
+      }
+      const float k = slope[static_cast<size_t>(r)];
+      float s_hit;
+      Eigen::Vector3f normal;
+      int axis;
+      if (p.shape == Shape::kEllipsoid) {
+        const Eigen::Vector3f d(horizontal.x(), horizontal.y(), k * L);  // lambda parametrization
+        const Eigen::Vector3f c = 0.5f * (p.lo + p.hi);
+        const Eigen::Vector3f inv_r = (0.5f * (p.hi - p.lo)).cwiseInverse();
+        const Eigen::Vector3f oo = (o - c).cwiseProduct(inv_r);
+        const Eigen::Vector3f dd = d.cwiseProduct(inv_r);
+        const float a = dd.squaredNorm(), b = oo.dot(dd), cc = oo.squaredNorm() - 1.0f;
+        const float disc = b * b - a * cc;
+        if (disc < 0) continue;
+        const float lambda = (-b - std::sqrt(disc)) / a;
+        if (lambda <= 0) continue;
+        s_hit = lambda * L;
+        normal = (oo + lambda * dd).cwiseProduct(inv_r).normalized();
+        axis = -1;
+      } else {
+        const float z_in = oz + k * s0;
+        if (z_in >= e.z_lo && z_in <= e.z_hi) {
+          if (e.s_in <= 0) continue;  // the camera is inside
+          s_hit = e.s_in;
+          if (e.axis >= 0) {
+            normal = Eigen::Vector3f::Zero();
+            normal[e.axis] = h[e.axis] > 0 ? -1.0f : 1.0f;
+            axis = e.axis;
+          } else {
+            const Eigen::Vector2f centre = 0.5f * (p.lo + p.hi).head<2>();
+            const Eigen::Vector2f radial = (o.head<2>() + h * s_hit - centre).normalized();
+            normal = Eigen::Vector3f(radial.x(), radial.y(), 0.0f);
+            axis = -1;
+          }
+        } else if (z_in > e.z_hi) {
+          if (k >= 0) continue;
+          s_hit = (e.z_hi - oz) / k;
+          normal = Eigen::Vector3f::UnitZ();
+          axis = 2;
+        } else {
+          if (k <= 0) continue;
+          s_hit = (e.z_lo - oz) / k;
+          normal = -Eigen::Vector3f::UnitZ();
+          axis = 2;
+        }
+        if (s_hit > e.s_out) continue;
+      }
+      if (s_hit >= best[static_cast<size_t>(r)] || s_hit > s_max) continue;
+      best[static_cast<size_t>(r)] = s_hit;
+      ColumnHit& hit = hits[r];
+      hit.lambda = s_hit / L;
+      hit.primitive = static_cast<int>(e.primitive);
+      hit.normal = normal;
+      hit.axis = axis;
+    }
+  };
+  auto add = [&](std::uint32_t index) {
+    if (sc->stamp[index] == column) return;
+    sc->stamp[index] = column;
+    const Primitive& p = city_.primitives[index];
+    Entry e{0, 0, p.lo.z(), p.hi.z(), index, -1};
+    if (p.shape == Shape::kBox) {
+      float s_in = -kHuge, s_out = kHuge;
+      for (int k = 0; k < 2; ++k) {
+        if (std::abs(h[k]) < 1e-12f) {
+          if (o[k] < p.lo[k] || o[k] > p.hi[k]) return;
+          continue;
+        }
+        float t1 = (p.lo[k] - o[k]) / h[k], t2 = (p.hi[k] - o[k]) / h[k];
+        if (t1 > t2) std::swap(t1, t2);
+        if (t1 > s_in) {
+          s_in = t1;
+          e.axis = k;
+        }
+        s_out = std::min(s_out, t2);
+      }
+      if (s_in > s_out || s_out <= 0) return;
+      e.s_in = s_in;
+      e.s_out = s_out;
+    } else {
+      const Eigen::Vector2f c = 0.5f * (p.lo + p.hi).head<2>();
+      const Eigen::Vector2f r = 0.5f * (p.hi - p.lo).head<2>();
+      const Eigen::Vector2f oo = (o.head<2>() - c).cwiseQuotient(r);
+      const Eigen::Vector2f hh = h.cwiseQuotient(r);
+      const float a = hh.squaredNorm(), b = oo.dot(hh), cc = oo.squaredNorm() - 1.0f;
+      const float disc = b * b - a * cc;
+      if (disc < 0) return;
+      const float root = std::sqrt(disc);
+      e.s_in = (-b - root) / a;
+      e.s_out = (-b + root) / a;
+      if (e.s_out <= 0) return;
+    }
+    sc->heap.push_back(e);
+    std::push_heap(sc->heap.begin(), sc->heap.end(), std::greater<Entry>());
+  };
+  auto drain = [&](float limit) {
+    // Processes the entries that start before `limit`, nearest first.
+    while (!sc->heap.empty() && sc->heap.front().s_in <= limit) {
+      std::pop_heap(sc->heap.begin(), sc->heap.end(), std::greater<Entry>());
+      const Entry e = sc->heap.back();
+      sc->heap.pop_back();
+      front = e.s_in;
+      process(e);
+    }
+  };
+
+  // 2D DDA along the column's line, clipped to the grid.
+  const float gx1 = x0_ + cell_ * static_cast<float>(nx_), gy1 = y0_ + cell_ * static_cast<float>(ny_);
+  const float inv_x = h.x() != 0 ? 1.0f / h.x() : kHuge, inv_y = h.y() != 0 ? 1.0f / h.y() : kHuge;
+  float ta = 0, tb = s_max;
+  {
+    float t1 = (x0_ - o.x()) * inv_x, t2 = (gx1 - o.x()) * inv_x;
+    if (t1 > t2) std::swap(t1, t2);
+    ta = std::max(ta, t1);
+    tb = std::min(tb, t2);
+    t1 = (y0_ - o.y()) * inv_y;
+    t2 = (gy1 - o.y()) * inv_y;
+    if (t1 > t2) std::swap(t1, t2);
+    ta = std::max(ta, t1);
+    tb = std::min(tb, t2);
+  }
+  if (ta < tb) {
+    int ix = CellX(o.x() + h.x() * (ta + 1e-3f)), iy = CellY(o.y() + h.y() * (ta + 1e-3f));
+    const int step_x = h.x() > 0 ? 1 : -1, step_y = h.y() > 0 ? 1 : -1;
+    const float dt_x = std::abs(cell_ * inv_x), dt_y = std::abs(cell_ * inv_y);
+    float next_x =
+        h.x() != 0 ? (x0_ + cell_ * static_cast<float>(ix + (h.x() > 0 ? 1 : 0)) - o.x()) * inv_x : kHuge;
+    float next_y =
+        h.y() != 0 ? (y0_ + cell_ * static_cast<float>(iy + (h.y() > 0 ? 1 : 0)) - o.y()) * inv_y : kHuge;
+    float t_in = ta;
+    stop_distance();  // places the horizon pointers
+    while (true) {
+      const float t_out = std::min({next_x, next_y, tb});
+      const size_t c = static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix);
+      // The cell matters while a row looking down is open, or the lowest open row looking up passes below the
+      // top of the cell.
+      const bool needed =
+          down < rows || (up >= 0 && oz + slope[static_cast<size_t>(up)] * t_in <= cell_top_[c]);
+      if (needed) {
+        for (std::uint32_t k = start_[c]; k < start_[c + 1]; ++k) add(items_[k].primitive);
+      }
+      drain(t_out);
+      front = sc->heap.empty() ? t_out : std::min(t_out, sc->heap.front().s_in);
+      if (t_out >= stop_distance() || t_out >= tb) break;
+      t_in = t_out;
+      if (next_x < next_y) {
+        ix += step_x;
+        next_x += dt_x;
+        if (ix < 0 || ix >= nx_) break;
+      } else {
+        iy += step_y;
+        next_y += dt_y;
+        if (iy < 0 || iy >= ny_) break;
+      }
+    }
+  }
+  drain(std::min(stop_distance(), s_max));
 }
 
 float SurfaceDistance(const Primitive& p, const Eigen::Vector3f& x) {

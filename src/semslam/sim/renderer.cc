@@ -61,85 +61,126 @@ void Renderer::Render(const Rigid3d& town_from_camera, std::uint32_t noise_key, 
   if (depth != nullptr) depth->create(camera_.height, camera_.width, CV_16UC1);
   const Eigen::Matrix3f rotation = town_from_camera.rotation.toRotationMatrix().cast<float>();
   const Eigen::Vector3f origin = town_from_camera.translation.cast<float>();
+  const bool level = options_.column_casting && (rotation.col(1) + Eigen::Vector3f::UnitZ()).norm() < 1e-5f;
+  if (level) {
+    auto columns = [&](const tbb::blocked_range<int>& r) {
+      RenderColumns(r.begin(), r.end(), rotation, origin, noise_key, grey, labels, depth);
+    };
+    if (options_.parallel) {
+      tbb::parallel_for(tbb::blocked_range<int>(0, camera_.width, 16), columns);
+    } else {
+      columns(tbb::blocked_range<int>(0, camera_.width));
+    }
+    return;
+  }
+  auto rows = [&](const tbb::blocked_range<int>& r) {
+    RenderRows(r.begin(), r.end(), rotation, origin, noise_key, grey, labels, depth);
+  };
   if (options_.parallel) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, camera_.height, 4), [&](const tbb::blocked_range<int>& r) {
-      RenderRows(r.begin(), r.end(), rotation, origin, noise_key, grey, labels, depth);
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, camera_.height, 4), rows);
   } else {
-    RenderRows(0, camera_.height, rotation, origin, noise_key, grey, labels, depth);
+    rows(tbb::blocked_range<int>(0, camera_.height));
+  }
+}
+
+Renderer::Pixel Renderer::Shade(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t, float z,
+                                int primitive, const Eigen::Vector3f& normal, int axis) const {
+  constexpr float kHazeGrey = 200.0f;
+  if (primitive < -1) return {SkyGrey(dir), static_cast<std::uint8_t>(SemanticClass::kSky), 0.0f};
+  SurfaceSample s;
+  s.point = origin + dir * t;
+  s.normal = normal;
+  if (s.normal.dot(dir) > 0) s.normal = -s.normal;
+  s.dir = dir;
+  s.t = t;
+  s.pixel_size = static_cast<float>(1.0 / camera_.fx);
+  s.axis = axis;
+  float albedo;
+  std::uint8_t label;
+  if (primitive < 0) {
+    albedo = ShadeGround(city_, s);
+    label = static_cast<std::uint8_t>(SemanticClass::kRoad);
+  } else {
+    const Primitive& p = city_.primitives[static_cast<size_t>(primitive)];
+    albedo = ShadePrimitive(city_, p, s);
+    label = p.label;
+  }
+  float light = static_cast<float>(options_.ambient) +
+                static_cast<float>(options_.sun_strength) * std::max(0.0f, s.normal.dot(sun_));
+  if (std::abs(s.normal.z()) < 0.5f) {
+    // Ambient occlusion at the foot of walls.
+    const float h = std::min(1.0f, std::max(0.0f, s.point.z() / 1.2f));
+    light *= 0.82f + 0.18f * h;
+  }
+  const float haze = 1.0f - std::exp(-t / static_cast<float>(options_.haze_distance));
+  const float lit = albedo * light;
+  return {lit + (kHazeGrey - lit) * haze, label, z};
+}
+
+void Renderer::Store(const Pixel& pixel, int u, int v, std::uint32_t noise_key, cv::Mat* grey,
+                     cv::Mat* labels, cv::Mat* depth) const {
+  float value = pixel.grey;
+  if (options_.sensor_noise > 0) {
+    const std::uint32_t h = Hash32(noise_key, static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v));
+    const float n = static_cast<float>(h & 0xFFFFu) * (1.0f / 65535.0f) +
+                    static_cast<float>(h >> 16) * (1.0f / 65535.0f) - 1.0f;
+    value += static_cast<float>(options_.sensor_noise * std::sqrt(6.0)) * n;
+  }
+  grey->at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(std::clamp(value, 0.0f, 255.0f) + 0.5f);
+  if (labels != nullptr) labels->at<std::uint8_t>(v, u) = pixel.label;
+  if (depth != nullptr) {
+    std::uint16_t d = 0;
+    if (pixel.z > 0) {
+      d = static_cast<std::uint16_t>(
+          std::min(65535.0, std::round(static_cast<double>(pixel.z) * kDepthScale)));
+      if (d == 0) d = 1;
+    }
+    depth->at<std::uint16_t>(v, u) = d;
   }
 }
 
 void Renderer::RenderRows(int row_begin, int row_end, const Eigen::Matrix3f& rotation,
                           const Eigen::Vector3f& origin, std::uint32_t noise_key, cv::Mat* grey,
                           cv::Mat* labels, cv::Mat* depth) const {
-  const float pixel_size = static_cast<float>(1.0 / camera_.fx);
   const float max_distance = static_cast<float>(options_.max_distance);
-  const float inv_haze = static_cast<float>(1.0 / options_.haze_distance);
-  const float ambient = static_cast<float>(options_.ambient),
-              sun_strength = static_cast<float>(options_.sun_strength);
-  const float noise_scale = static_cast<float>(options_.sensor_noise * std::sqrt(6.0));
-  constexpr float kHazeGrey = 200.0f;
-  const auto sky_label = static_cast<std::uint8_t>(SemanticClass::kSky);
-  const auto road_label = static_cast<std::uint8_t>(SemanticClass::kRoad);
   for (int v = row_begin; v < row_end; ++v) {
-    std::uint8_t* g_row = grey->ptr<std::uint8_t>(v);
-    std::uint8_t* l_row = labels != nullptr ? labels->ptr<std::uint8_t>(v) : nullptr;
-    std::uint16_t* d_row = depth != nullptr ? depth->ptr<std::uint16_t>(v) : nullptr;
     const float yn = yn_[static_cast<size_t>(v)];
     for (int u = 0; u < camera_.width; ++u) {
       const float xn = xn_[static_cast<size_t>(u)];
       const float inv_norm = 1.0f / std::sqrt(xn * xn + yn * yn + 1.0f);
       const Eigen::Vector3f dir = rotation * Eigen::Vector3f(xn * inv_norm, yn * inv_norm, inv_norm);
       RayHit hit;
-      float value;
-      std::uint8_t label = sky_label;
-      float z = 0;
+      Pixel pixel;
       if (index_.Intersect(origin, dir, max_distance, &hit)) {
-        SurfaceSample s;
-        s.point = origin + dir * hit.t;
-        s.normal = hit.normal;
-        if (s.normal.dot(dir) > 0) s.normal = -s.normal;
-        s.dir = dir;
-        s.t = hit.t;
-        s.pixel_size = pixel_size;
-        s.axis = hit.axis;
-        float albedo;
-        if (hit.primitive < 0) {
-          albedo = ShadeGround(city_, s);
-          label = road_label;
-        } else {
-          const Primitive& p = city_.primitives[static_cast<size_t>(hit.primitive)];
-          albedo = ShadePrimitive(city_, p, s);
-          label = p.label;
-        }
-        float light = ambient + sun_strength * std::max(0.0f, s.normal.dot(sun_));
-        if (std::abs(s.normal.z()) < 0.5f) {
-          // Ambient occlusion at the foot of walls.
-          const float h = std::min(1.0f, std::max(0.0f, s.point.z() / 1.2f));
-          light *= 0.82f + 0.18f * h;
-        }
-        const float haze = 1.0f - std::exp(-hit.t * inv_haze);
-        value = albedo * light + (kHazeGrey - albedo * light) * haze;
-        z = hit.t * inv_norm;
+        pixel = Shade(origin, dir, hit.t, hit.t * inv_norm, hit.primitive, hit.normal, hit.axis);
       } else {
-        value = SkyGrey(dir);
+        pixel = Shade(origin, dir, 0, 0, -2, Eigen::Vector3f::UnitZ(), 2);
       }
-      if (noise_scale > 0) {
-        const std::uint32_t h =
-            Hash32(noise_key, static_cast<std::uint32_t>(u), static_cast<std::uint32_t>(v));
-        const float n = static_cast<float>(h & 0xFFFFu) * (1.0f / 65535.0f) +
-                        static_cast<float>(h >> 16) * (1.0f / 65535.0f) - 1.0f;
-        value += noise_scale * n;
-      }
-      g_row[u] = static_cast<std::uint8_t>(std::clamp(value, 0.0f, 255.0f) + 0.5f);
-      if (l_row != nullptr) l_row[u] = label;
-      if (d_row != nullptr) {
-        d_row[u] = z <= 0 ? 0
-                          : static_cast<std::uint16_t>(
-                                std::min(65535.0, std::round(static_cast<double>(z) * kDepthScale)));
-        if (z > 0 && d_row[u] == 0) d_row[u] = 1;
-      }
+      Store(pixel, u, v, noise_key, grey, labels, depth);
+    }
+  }
+}
+
+void Renderer::RenderColumns(int col_begin, int col_end, const Eigen::Matrix3f& rotation,
+                             const Eigen::Vector3f& origin, std::uint32_t noise_key, cv::Mat* grey,
+                             cv::Mat* labels, cv::Mat* depth) const {
+  const int rows = camera_.height;
+  ColumnScratch scratch;
+  std::vector<ColumnHit> hits(static_cast<size_t>(rows));
+  const float yn0 = yn_.front();
+  const float dyn = static_cast<float>(1.0 / camera_.fy);
+  for (int u = col_begin; u < col_end; ++u) {
+    const float xn = xn_[static_cast<size_t>(u)];
+    const Eigen::Vector3f horizontal = rotation.col(0) * xn + rotation.col(2);
+    index_.CastColumn(origin, horizontal, yn0, dyn, rows, static_cast<float>(options_.max_distance), &scratch,
+                      hits.data());
+    for (int v = 0; v < rows; ++v) {
+      const float yn = yn_[static_cast<size_t>(v)];
+      const float norm = std::sqrt(xn * xn + yn * yn + 1.0f);
+      const Eigen::Vector3f dir = (horizontal - yn * Eigen::Vector3f::UnitZ()) / norm;
+      const ColumnHit& h = hits[static_cast<size_t>(v)];
+      Store(Shade(origin, dir, h.lambda * norm, h.lambda, h.primitive, h.normal, h.axis), u, v, noise_key,
+            grey, labels, depth);
     }
   }
 }

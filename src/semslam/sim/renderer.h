@@ -23,6 +23,8 @@ struct RenderOptions {
   double sun_azimuth_deg = 150.0;  // direction towards the sun, counter-clockwise from east
   double sun_elevation_deg = 48.0;
   bool parallel = true;
+  // Level cameras cast whole image columns at once (SceneIndex::CastColumn); false: one ray per pixel.
+  bool column_casting = true;
   void Check() const;
 };
 
@@ -44,8 +46,23 @@ class Renderer {
   const PinholeCamera& camera() const { return camera_; }
 
  private:
+  struct Pixel {
+    float grey;
+    std::uint8_t label;
+    float z;  // camera z, 0 for the sky
+  };
+  // Shades a pixel whose ray (unit direction `dir`, `t` along it) hit `primitive` (-1: ground, -2: nothing).
+  Pixel Shade(const Eigen::Vector3f& origin, const Eigen::Vector3f& dir, float t, float z, int primitive,
+              const Eigen::Vector3f& normal, int axis) const;
+  void Store(const Pixel& pixel, int u, int v, std::uint32_t noise_key, cv::Mat* grey, cv::Mat* labels,
+             cv::Mat* depth) const;
+  // One ray per pixel (any camera orientation).
   void RenderRows(int row_begin, int row_end, const Eigen::Matrix3f& rotation, const Eigen::Vector3f& origin,
                   std::uint32_t noise_key, cv::Mat* grey, cv::Mat* labels, cv::Mat* depth) const;
+  // Whole columns at once (level cameras: the image y axis points straight down).
+  void RenderColumns(int col_begin, int col_end, const Eigen::Matrix3f& rotation,
+                     const Eigen::Vector3f& origin, std::uint32_t noise_key, cv::Mat* grey, cv::Mat* labels,
+                     cv::Mat* depth) const;
 
   const City& city_;
   const SceneIndex& index_;
