@@ -89,7 +89,7 @@ Json OptionsJson(const SynthOptions& o) {
               {"dropout", o.gps.dropout},
               {"outliers", o.gps.outliers},
               {"outlier_distance", o.gps.outlier_distance},
-              {"seed", o.gps.seed != 0 ? o.gps.seed : 0}};
+              {"seed", o.gps.seed}};
   return j;
 }
 
