@@ -365,11 +365,15 @@ float Grass(const Primitive& p, const SurfaceSample& s) {
 
 float Foliage(const Primitive& p, const SurfaceSample& s) {
   const float fp = CurvedFootprint(s);
-  const float n = FilteredNoise3Impl(s.point, p.variant, 1.6f, 4, fp);
-  // Leaf clusters: a soft threshold whose softness grows with the footprint (no sharp edge below a pixel).
-  const float soft = 0.1f + 3.0f * fp;
-  const float leaf = SmoothStep(-soft, soft, n + 0.15f * (p.tone - 0.5f));
-  return 38.0f + 90.0f * leaf + 18.0f * p.tone;
+  // Clusters of leaves (about a metre) made of single leaves and gaps (a few centimetres to decimetres).
+  const float clusters = FilteredNoise3Impl(s.point, p.variant, 1.3f, 2, fp);
+  const float leaves = FilteredNoise3Impl(s.point, p.variant + 77u, 5.0f, 3, fp);
+  // A soft threshold whose softness grows with the footprint (no sharp edge below a pixel).
+  const float soft = 0.12f + 3.0f * fp;
+  const float leaf = SmoothStep(-soft, soft, 0.7f * clusters + 0.9f * leaves + 0.2f * (p.tone - 0.5f));
+  // The crown shades its own underside.
+  const float underside = 0.72f + 0.28f * (0.5f + 0.5f * s.normal.z());
+  return (34.0f + 100.0f * leaf + 16.0f * p.tone) * underside;
 }
 
 float Bark(const Primitive& p, const SurfaceSample& s) {
