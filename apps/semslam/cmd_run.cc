@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -23,6 +24,9 @@ struct RunArgs {
   std::string map_in;
   std::string pacing;
   std::string vocabulary;
+  std::string segmenter = "none";
+  std::uint64_t seed = 0;
+  bool exclude_dynamic = false;
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
@@ -43,6 +47,9 @@ void Run(const RunArgs& args) {
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
   if (args.no_loop_closing) options.slam.loop.enabled = false;
   options.slam.localization_only = args.localization_only;
+  options.slam.exclude_dynamic = args.exclude_dynamic;
+  options.segmenter = args.segmenter;
+  options.seed = args.seed;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.map_in = args.map_in;
   options.show_progress = !args.quiet;
@@ -68,6 +75,16 @@ void AddRunCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--map-in", args->map_in, "Start from this saved map (map.semslam): relocalize first")
       ->check(CLI::ExistingFile);
+  cmd->add_option(
+         "--segmenter", args->segmenter,
+         "Keyframe segmentation: none, enet:FILE (ENet Torch7), onnx:CARD.yaml, labels:DIR (label or "
+         "probability images), truth-noisy:RATE (the synthetic city's labels with noise); optional "
+         ",key=value settings (see models/README.md)")
+      ->capture_default_str();
+  cmd->add_flag(
+      "--exclude-dynamic", args->exclude_dynamic,
+      "Keep points on persons, riders and vehicles out of tracking and relocalization (needs a segmenter)");
+  cmd->add_option("--seed", args->seed, "Seed of noisy segmenters")->capture_default_str();
   cmd->add_flag("--localization-only", args->localization_only,
                 "Track against --map-in without changing it (no new keyframes or points)");
   cmd->add_option(

@@ -1,12 +1,12 @@
 #include "semslam/mapping/local_mapper.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <set>
 #include <unordered_map>
-
-#include <spdlog/spdlog.h>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/triangulation.h"
@@ -237,8 +237,15 @@ Eigen::Matrix3d FundamentalFromPoses(const KeyFrame& kf1, const KeyFrame& kf2) {
   const Rigid3d kf2_from_kf1 = kf2.camera_from_world() * kf1.world_from_camera();
   const Eigen::Matrix3d k_inv = kf1.camera().K().inverse();
   const Eigen::Matrix3d k2_inv = kf2.camera().K().inverse();
-  return k2_inv.transpose() * SkewSymmetric(kf2_from_kf1.translation) * kf2_from_kf1.rotation.toRotationMatrix() *
-         k_inv;
+  return k2_inv.transpose() * SkewSymmetric(kf2_from_kf1.translation) *
+         kf2_from_kf1.rotation.toRotationMatrix() * k_inv;
+}
+
+// Whether the keyframe's segmentation saw a moving class at the keypoint.
+bool IsDynamicKeypoint(const KeyFrame& keyframe, int index) {
+  ClassLogProbs observation;
+  return keyframe.keypoint_labels.Get(static_cast<size_t>(index), &observation) &&
+         DynamicProbability(observation.data()) > 0.5f;
 }
 
 struct NewPoint {
@@ -282,6 +289,7 @@ void LocalMapper::CreateNewMapPoints() {
       const Rigid3d& t2w = kf2.camera_from_world();
       const Eigen::Matrix3d r_w2 = kf2.world_from_camera().rotation.toRotationMatrix();
       for (const auto& [i1, i2] : pairs) {
+        if (options_.exclude_dynamic && (IsDynamicKeypoint(kf1, i1) || IsDynamicKeypoint(kf2, i2))) continue;
         const Keypoint& kp1 = d1.features.keypoints[static_cast<size_t>(i1)];
         const Keypoint& kp2 = d2.features.keypoints[static_cast<size_t>(i2)];
         const bool stereo1 = d1.HasDepth(i1), stereo2 = d2.HasDepth(i2);
@@ -290,9 +298,11 @@ void LocalMapper::CreateNewMapPoints() {
         const Eigen::Vector3d ray1 = r_w1 * b1, ray2 = r_w2 * b2;
         const double cos_rays = ray1.dot(ray2) / (ray1.norm() * ray2.norm());
         const double cos_stereo1 =
-            stereo1 ? std::cos(2.0 * std::atan2(d1.stereo->baseline / 2, d1.depth[static_cast<size_t>(i1)])) : 2.0;
+            stereo1 ? std::cos(2.0 * std::atan2(d1.stereo->baseline / 2, d1.depth[static_cast<size_t>(i1)]))
+                    : 2.0;
         const double cos_stereo2 =
-            stereo2 ? std::cos(2.0 * std::atan2(d2.stereo->baseline / 2, d2.depth[static_cast<size_t>(i2)])) : 2.0;
+            stereo2 ? std::cos(2.0 * std::atan2(d2.stereo->baseline / 2, d2.depth[static_cast<size_t>(i2)]))
+                    : 2.0;
         const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
 
         std::optional<Eigen::Vector3d> x;
@@ -305,7 +315,8 @@ void LocalMapper::CreateNewMapPoints() {
         }
         if (!x) continue;
         // In front of both cameras, reprojecting within the keypoints' uncertainty.
-        auto reprojects = [&](const Rigid3d& tcw, const FrameData& d, int index, const Keypoint& kp, bool stereo) {
+        auto reprojects = [&](const Rigid3d& tcw, const FrameData& d, int index, const Keypoint& kp,
+                              bool stereo) {
           const Eigen::Vector3d pc = tcw * *x;
           if (pc.z() <= 0) return false;
           const Eigen::Vector2d uv = d.camera.Project(pc);
@@ -434,8 +445,8 @@ void LocalMapper::LocalBundleAdjustment() {
 void LocalMapper::CullKeyFrames() {
   ScopedTimer timer(timing_, "mapping_keyframe_culling");
   auto lock = map_.WriteLock();
-  const double close = current_->data().stereo ? options_.close_depth_baselines * current_->data().stereo->baseline
-                                               : 0.0;
+  const double close =
+      current_->data().stereo ? options_.close_depth_baselines * current_->data().stereo->baseline : 0.0;
   // A copy: erasing a keyframe changes the current keyframe's covisibility list.
   const std::vector<KeyFrame*> covisibles = current_->Covisibles();
   for (KeyFrame* kf : covisibles) {

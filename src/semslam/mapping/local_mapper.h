@@ -25,23 +25,26 @@ struct LocalMapperOptions {
   double close_depth_baselines = 40.0;  // stereo: "close" points, as in tracking
   int triangulation_neighbours_mono = 20;
   int triangulation_neighbours_stereo = 10;
-  double redundant_keyframe_ratio = 0.9;  // a keyframe is culled when this share of its points is seen elsewhere
-  int local_ba_iterations = 5;            // first pass; a second pass of twice as many follows without outliers
+  double redundant_keyframe_ratio =
+      0.9;  // a keyframe is culled when this share of its points is seen elsewhere
+  int local_ba_iterations = 5;
+  // No new points from keypoints a segmentation labeled as moving classes.
+  bool exclude_dynamic = false;  // first pass; a second pass of twice as many follows without outliers
 
   void Check() const;
 };
 
 class LocalMapper {
  public:
-  LocalMapper(const LocalMapperOptions& options, Map& map, const Vocabulary& vocabulary, KeyFrameDatabase& database,
-              TimingRegistry& timing);
+  LocalMapper(const LocalMapperOptions& options, Map& map, const Vocabulary& vocabulary,
+              KeyFrameDatabase& database, TimingRegistry& timing);
   ~LocalMapper();
 
   // Called with each keyframe after it is processed (the loop closer, the segmentation scheduler, ...).
   void AddKeyFrameListener(std::function<void(KeyFrame*)> listener);
 
   void Start();
-  void RequestFinish();   // finishes the queue first, then stops the thread
+  void RequestFinish();  // finishes the queue first, then stops the thread
   void Join();
 
   void InsertKeyFrame(KeyFrame* keyframe);

@@ -7,8 +7,9 @@
 namespace semslam {
 
 void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
-                                  const std::vector<KeyFrame*>& fixed_keyframes, const std::vector<MapPoint*>& points,
-                                  BundleAdjustmentProblem* problem, std::vector<ObservationRef>* refs) {
+                                  const std::vector<KeyFrame*>& fixed_keyframes,
+                                  const std::vector<MapPoint*>& points, BundleAdjustmentProblem* problem,
+                                  std::vector<ObservationRef>* refs) {
   std::unordered_map<const KeyFrame*, int> pose_index;
   auto add_pose = [&](KeyFrame* kf, bool fixed) {
     pose_index[kf] = static_cast<int>(problem->camera_from_world.size());
@@ -41,9 +42,10 @@ void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
   }
 }
 
-void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem, const BundleAdjustmentResult& result,
-                           const std::vector<KeyFrame*>& keyframes, const std::vector<MapPoint*>& points,
-                           const std::vector<ObservationRef>& refs, bool drop_outliers) {
+void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
+                           const BundleAdjustmentResult& result, const std::vector<KeyFrame*>& keyframes,
+                           const std::vector<MapPoint*>& points, const std::vector<ObservationRef>& refs,
+                           bool drop_outliers) {
   if (drop_outliers) {
     for (size_t k = 0; k < refs.size() && k < result.outlier.size(); ++k) {
       if (!result.outlier[k]) continue;
@@ -56,7 +58,8 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem, con
     }
   }
   for (size_t i = 0; i < keyframes.size(); ++i) {
-    if (!problem.pose_fixed[i] && !keyframes[i]->is_bad()) keyframes[i]->SetPose(problem.camera_from_world[i]);
+    if (!problem.pose_fixed[i] && !keyframes[i]->is_bad())
+      keyframes[i]->SetPose(problem.camera_from_world[i]);
   }
   for (size_t j = 0; j < points.size(); ++j) {
     if (points[j]->is_bad()) continue;
@@ -82,8 +85,8 @@ void GlobalBundleAdjustment(Map& map, int iterations, std::atomic<bool>* abort) 
   ApplyBundleAdjustment(map, problem, result, keyframes, points, refs, false);
 }
 
-int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12, Sim3d* kf1_from_kf2,
-               double chi2_threshold, bool fix_scale) {
+int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12,
+               Sim3d* kf1_from_kf2, double chi2_threshold, bool fix_scale) {
   Sim3RefinementProblem problem;
   problem.camera1 = kf1.camera();
   problem.camera2 = kf2.camera();

@@ -21,20 +21,22 @@ struct ObservationRef {
 // Adds poses for `keyframes` (free) and `fixed_keyframes` (fixed; keyframe 0 is always fixed), the `points`,
 // and every observation of those points by those keyframes. Read lock.
 void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
-                                  const std::vector<KeyFrame*>& fixed_keyframes, const std::vector<MapPoint*>& points,
-                                  BundleAdjustmentProblem* problem, std::vector<ObservationRef>* refs);
+                                  const std::vector<KeyFrame*>& fixed_keyframes,
+                                  const std::vector<MapPoint*>& points, BundleAdjustmentProblem* problem,
+                                  std::vector<ObservationRef>* refs);
 
 // Writes optimized poses and points back (skipping bad ones) and drops outlier observations. Write lock.
-void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem, const BundleAdjustmentResult& result,
-                           const std::vector<KeyFrame*>& keyframes, const std::vector<MapPoint*>& points,
-                           const std::vector<ObservationRef>& refs, bool drop_outliers);
+void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
+                           const BundleAdjustmentResult& result, const std::vector<KeyFrame*>& keyframes,
+                           const std::vector<MapPoint*>& points, const std::vector<ObservationRef>& refs,
+                           bool drop_outliers);
 
 // Optimizes every keyframe and point of the map in place. Write lock held by the caller.
 void GlobalBundleAdjustment(Map& map, int iterations, std::atomic<bool>* abort);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
 // cleared from `matches12`. Returns the inlier count. Read lock.
-int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12, Sim3d* kf1_from_kf2,
-               double chi2_threshold, bool fix_scale);
+int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12,
+               Sim3d* kf1_from_kf2, double chi2_threshold, bool fix_scale);
 
 }  // namespace semslam

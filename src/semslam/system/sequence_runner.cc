@@ -12,6 +12,9 @@
 #include "semslam/eval/trajectory_metrics.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
+#include "semslam/semantics/segmenter.h"
+#include "semslam/semantics/semantic_outputs.h"
+#include "semslam/system/semantic_evaluation.h"
 
 namespace semslam {
 
@@ -44,10 +47,38 @@ namespace {
 nlohmann::json TimingJson(const TimingRegistry& timing) {
   nlohmann::json j = nlohmann::json::object();
   for (const auto& [name, s] : timing.SummarizeAll()) {
-    j[name] = {{"count", s.count},     {"median_ms", s.median_ms}, {"mean_ms", s.mean_ms},
-               {"p95_ms", s.p95_ms},   {"max_ms", s.max_ms},       {"total_ms", s.total_ms}};
+    j[name] = {{"count", s.count},   {"median_ms", s.median_ms}, {"mean_ms", s.mean_ms},
+               {"p95_ms", s.p95_ms}, {"max_ms", s.max_ms},       {"total_ms", s.total_ms}};
   }
   return j;
+}
+
+std::vector<SemanticPoint> SemanticPoints(const Map& map) {
+  auto lock = map.ReadLock();
+  std::vector<SemanticPoint> points;
+  for (const MapPoint* p : map.MapPoints()) {
+    if (!p->is_bad()) points.push_back(ToSemanticPoint(p->position(), p->labels()));
+  }
+  return points;
+}
+
+nlohmann::json ClassCountsJson(const ClassCounts& counts) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int c = 0; c < kNumClasses; ++c) j[std::string(ClassKey(c))] = counts[static_cast<size_t>(c)];
+  j["unlabeled"] = counts[kNumClasses];
+  return j;
+}
+
+nlohmann::json AccuracyJson(const ClassAccuracyCounts& counts) {
+  nlohmann::json per_class = nlohmann::json::object();
+  for (int c = 0; c < kNumClasses; ++c) {
+    const auto n = counts.evaluated[static_cast<size_t>(c)];
+    if (n == 0) continue;
+    per_class[std::string(ClassKey(c))] = {
+        {"evaluated", n},
+        {"accuracy", static_cast<double>(counts.correct[static_cast<size_t>(c)]) / static_cast<double>(n)}};
+  }
+  return {{"accuracy", counts.Accuracy()}, {"evaluated", counts.total_evaluated}, {"per_class", per_class}};
 }
 
 }  // namespace
@@ -59,12 +90,13 @@ RunSummary RunSequence(const RunOptions& options) {
   const size_t first = options.first_frame;
   const size_t end = std::min(options.end_frame, sequence->size());
   if (first >= end) {
-    throw InvalidArgument(fmt::format("run: frames {}:{} are outside the sequence's {} frames", first, end,
-                                      sequence->size()));
+    throw InvalidArgument(
+        fmt::format("run: frames {}:{} are outside the sequence's {} frames", first, end, sequence->size()));
   }
   const bool stereo = options.slam.mode == SensorMode::kStereo;
   if (stereo && !sequence->stereo()) {
-    throw InputError(sequence->directory(), "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
+    throw InputError(sequence->directory(),
+                     "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
   }
   std::filesystem::create_directories(options.output);
   spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
@@ -73,18 +105,25 @@ RunSummary RunSequence(const RunOptions& options) {
 
   SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
   if (!options.map_in.empty()) slam.LoadMap(options.map_in);
+  SegmenterContext segmenter_context;
+  segmenter_context.truth_label_dir = sequence->LabelDirectory();
+  segmenter_context.seed = options.seed;
+  std::shared_ptr<Segmenter> segmenter = MakeSegmenter(options.segmenter, segmenter_context);
+  const std::string segmenter_description = segmenter ? segmenter->Describe() : "none";
+  slam.EnableSegmentation(segmenter);
 
   ProgressReporter progress("run", end - first, options.show_progress);
   for (size_t i = first; i < end; ++i) {
     const cv::Mat left = sequence->LoadImage(i, 0);
     const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
     const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
-    progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), slam.map().NumKeyFrames()));
+    progress.Update(i - first + 1,
+                    fmt::format("{}, {} keyframes", ToString(result.state), slam.map().NumKeyFrames()));
   }
   slam.Finish();
   const SlamStatistics stats = slam.Statistics();
-  progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked, stats.frames,
-                              stats.keyframes, stats.map_points, stats.loops));
+  progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,
+                              stats.frames, stats.keyframes, stats.map_points, stats.loops));
 
   const Trajectory trajectory = slam.FrameTrajectory();
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
@@ -111,17 +150,49 @@ RunSummary RunSequence(const RunOptions& options) {
   };
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopEvent& e : slam.Loops()) {
-    loops.push_back({{"query_keyframe", e.query_keyframe}, {"matched_keyframe", e.matched_keyframe},
-                     {"timestamp", e.query_timestamp}, {"matches", e.matches}, {"scale", e.scale},
+    loops.push_back({{"query_keyframe", e.query_keyframe},
+                     {"matched_keyframe", e.matched_keyframe},
+                     {"timestamp", e.query_timestamp},
+                     {"matches", e.matches},
+                     {"scale", e.scale},
                      {"correction_m", e.correction_m}});
   }
   run["loop_events"] = loops;
+  const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
+  WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
+  run["classes"] = ClassCountsJson(CountLabels(semantic_points));
+  nlohmann::json segmentation = {{"segmenter", segmenter_description},
+                                 {"segmented_keyframes", stats.segmented_keyframes},
+                                 {"segmented_frames", stats.segmented_frames},
+                                 {"exclude_dynamic", options.slam.exclude_dynamic}};
+  if (const auto worker = slam.SegmentationStats()) {
+    segmentation["submitted"] = worker->submitted;
+    segmentation["skipped"] = worker->skipped;
+    segmentation["failed"] = worker->failed;
+    segmentation["median_ms"] = worker->segmentation_ms.median_ms;
+  }
+  run["segmentation"] = segmentation;
+  if (const auto label_dir = sequence->LabelDirectory(); label_dir && stats.segmented_keyframes > 0) {
+    const SemanticEvaluation evaluation = EvaluateSemantics(slam.map(), *label_dir);
+    summary.label_accuracy = evaluation.fused.Accuracy();
+    run["label_accuracy"] = evaluation.fused.Accuracy();
+    run["label_evaluation"] = {{"fused_points", AccuracyJson(evaluation.fused)},
+                               {"single_frame_keypoints", AccuracyJson(evaluation.single_frame)},
+                               {"points_unlabeled", evaluation.points_unlabeled},
+                               {"keyframes", evaluation.keyframes}};
+  }
   if (const auto truth = sequence->GroundTruth(); truth && trajectory.size() >= 3) {
-    const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
-    summary.ate_rmse = ate.rmse;
-    run["ate_rmse"] = ate.rmse;
-    run["ate_alignment"] = stereo ? "se3" : "sim3";
-    run["path_length_m"] = PathLength(*truth);
+    try {
+      const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+      summary.ate_rmse = ate.rmse;
+      run["ate_rmse"] = ate.rmse;
+      run["ate_alignment"] = stereo ? "se3" : "sim3";
+      run["ate_scale"] = ate.scale;
+      run["ate_matched"] = ate.matched;
+      run["path_length_m"] = PathLength(*truth);
+    } catch (const EvaluationError& e) {
+      spdlog::warn("no accuracy figures: {}", e.what());
+    }
   }
   WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");

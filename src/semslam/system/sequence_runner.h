@@ -4,6 +4,7 @@
 // semantic and geographic parts are enabled, their outputs too).
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <string>
@@ -18,7 +19,11 @@ struct RunOptions {
   SlamOptions slam;
   size_t first_frame = 0;
   size_t end_frame = std::numeric_limits<size_t>::max();  // exclusive
-  std::filesystem::path map_in;   // start from this map (relocalize first)
+  std::filesystem::path map_in;                           // start from this map (relocalize first)
+  // Semantic segmentation of keyframes (semantics/segmenter.h MakeSegmenter spec: none, enet:FILE,
+  // onnx:CARD.yaml, labels:DIR, truth-noisy:RATE, ...).
+  std::string segmenter = "none";
+  std::uint64_t seed = 0;  // for noisy segmenters
   bool save_map = true;
   bool show_progress = true;
 
@@ -29,6 +34,7 @@ struct RunSummary {
   SlamStatistics statistics;
   double seconds = 0.0;
   double ate_rmse = -1.0;  // against the sequence's ground truth, when it has one (Sim(3) mono, SE(3) stereo)
+  double label_accuracy = -1.0;  // map-point labels against the synthetic city's surfaces, when known
 };
 
 // Throws InputError for unreadable inputs and InvalidArgument for bad options.

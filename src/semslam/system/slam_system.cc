@@ -1,14 +1,15 @@
 #include "semslam/system/slam_system.h"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <thread>
-
-#include <spdlog/spdlog.h>
 
 #include "semslam/core/error.h"
 #include "semslam/mapping/map_optimization.h"
 #include "semslam/place/keyframe_database.h"
 #include "semslam/place/vocabulary.h"
+#include "semslam/semantics/label_fusion.h"
 
 namespace semslam {
 
@@ -16,16 +17,21 @@ void SlamOptions::Check() const {
   tracker.Check();
   mapper.Check();
   loop.Check();
-  Require(tracker.monocular == (mode == SensorMode::kMonocular), "slam: tracker mode disagrees with the sensor mode");
+  Require(tracker.monocular == (mode == SensorMode::kMonocular),
+          "slam: tracker mode disagrees with the sensor mode");
 }
 
-SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo)
+SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,
+                       std::optional<StereoRig> stereo)
     : options_(options), camera_(camera), stereo_(std::move(stereo)) {
   options_.tracker.monocular = options_.mode == SensorMode::kMonocular;
   options_.mapper.monocular = options_.tracker.monocular;
   options_.loop.fix_scale = !options_.tracker.monocular;
-  if (!options_.tracker.monocular) options_.loop.max_correction_ratio = std::min(options_.loop.max_correction_ratio, 0.1);
+  if (!options_.tracker.monocular)
+    options_.loop.max_correction_ratio = std::min(options_.loop.max_correction_ratio, 0.1);
   options_.tracker.localization_only = options_.localization_only;
+  options_.tracker.exclude_dynamic = options_.exclude_dynamic;
+  options_.mapper.exclude_dynamic = options_.exclude_dynamic;
   options_.Check();
   Require(options_.mode == SensorMode::kMonocular || stereo_.has_value(),
           "stereo mode needs a sequence with a right camera and a baseline");
@@ -37,7 +43,8 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera, 
   database_ = std::make_unique<KeyFrameDatabase>(vocabulary_->size());
   map_ = std::make_unique<Map>();
   mapper_ = std::make_unique<LocalMapper>(options_.mapper, *map_, *vocabulary_, *database_, timing_);
-  loop_closer_ = std::make_unique<LoopCloser>(options_.loop, *map_, *vocabulary_, *database_, *mapper_, timing_);
+  loop_closer_ =
+      std::make_unique<LoopCloser>(options_.loop, *map_, *vocabulary_, *database_, *mapper_, timing_);
   mapper_->AddKeyFrameListener([this](KeyFrame* kf) { loop_closer_->InsertKeyFrame(kf); });
   tracker_ = std::make_unique<Tracker>(options_.tracker, camera_, stereo_, *map_, *vocabulary_, *database_,
                                        options_.localization_only ? nullptr : mapper_.get(), timing_);
@@ -49,6 +56,63 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera, 
 
 SlamSystem::~SlamSystem() { Finish(); }
 
+void SlamSystem::EnableSegmentation(std::shared_ptr<Segmenter> segmenter) {
+  Require(frames_ == 0, "segmentation must be enabled before the first frame");
+  if (!segmenter) return;
+  spdlog::info("segmentation: {}", segmenter->Describe());
+  segmentation_ = std::make_unique<SegmentationWorker>(
+      std::move(segmenter), [this](SegmentationResult&& result) { OnSegmentation(std::move(result)); });
+}
+
+std::optional<SegmentationWorkerStats> SlamSystem::SegmentationStats() const {
+  if (!segmentation_) return std::nullopt;
+  return segmentation_->stats();
+}
+
+namespace {
+// Request ids of frames that are not keyframes: the frame index with the top bit set.
+constexpr std::uint64_t kFrameRequest = std::uint64_t{1} << 63;
+}  // namespace
+
+void SlamSystem::OnSegmentation(SegmentationResult&& result) {
+  ScopedTimer timer(timing_, "label_fusion");
+  if (result.keyframe_id & kFrameRequest) {
+    FrameObservations observations;
+    {
+      std::lock_guard pending(pending_frames_mutex_);
+      const auto it = pending_frames_.find(result.keyframe_id);
+      if (it == pending_frames_.end()) return;
+      observations = std::move(it->second);
+      pending_frames_.erase(it);
+    }
+    auto lock = map_->WriteLock();
+    std::vector<float> rows;
+    SampleAtPixels(result.segmentation, observations.pixels, &rows);
+    for (size_t k = 0; k < observations.points.size(); ++k) {
+      MapPoint* point = observations.points[k]->Resolve();
+      if (!point->is_bad()) FuseSampledObservation(point->labels(), rows.data() + k * kNumClasses);
+    }
+    ++segmented_frames_;
+    return;
+  }
+  auto lock = map_->WriteLock();
+  KeyFrame* keyframe = map_->KeyFrameById(result.keyframe_id);
+  if (keyframe == nullptr || keyframe->is_bad()) return;  // culled while it was being segmented
+  // What the segmentation says at every keypoint, for points that gain an observation here later...
+  std::vector<float> rows;
+  SampleAtKeypoints(
+      result.segmentation, keyframe->features().keypoints,
+      [](const Keypoint& keypoint) { return keypoint.pixel; }, &rows);
+  keyframe->keypoint_labels.Assign(rows);
+  // ...and the points it sees now, projected into it (eqs. 1-2) and fused (eqs. 3-6).
+  std::vector<PointObservation> points;
+  for (MapPoint* point : keyframe->map_points()) {
+    if (point != nullptr && !point->is_bad()) points.push_back({point->position(), &point->labels()});
+  }
+  FuseKeyframeObservations(result.segmentation, keyframe->camera_from_world(), keyframe->camera(), points);
+  ++segmented_keyframes_;
+}
+
 MapFileContents SlamSystem::LoadMap(const std::filesystem::path& path) {
   Require(frames_ == 0, "a map can only be loaded before the first frame");
   auto lock = map_->WriteLock();
@@ -58,7 +122,8 @@ MapFileContents SlamSystem::LoadMap(const std::filesystem::path& path) {
     kf->has_bow = true;
     database_->Add(kf->id(), kf->bow);
   }
-  spdlog::info("map {} loaded: {} keyframes, {} points", path.string(), map_->NumKeyFrames(), map_->NumMapPoints());
+  spdlog::info("map {} loaded: {} keyframes, {} points", path.string(), map_->NumKeyFrames(),
+               map_->NumMapPoints());
   tracker_->SetMapLoaded();
   return contents;
 }
@@ -83,6 +148,7 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   }
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
+  if (segmentation_) SubmitForSegmentation(frame_id, left, result);
   if (result.state == TrackingState::kOk) ++tracked_;
   if (result.reset_requested) ResetMap();
   if (options_.pacing == Pacing::kSynchronous && (result.new_keyframe || result.initialized_now)) {
@@ -91,10 +157,43 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   return result;
 }
 
+void SlamSystem::SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left,
+                                       const TrackingResult& result) {
+  recent_images_.emplace_back(frame_id, left);
+  while (recent_images_.size() > kRecentImages) recent_images_.pop_front();
+  if (!result.new_keyframes.empty()) {
+    for (const NewKeyFrame& created : result.new_keyframes) {
+      for (const auto& [id, image] : recent_images_) {
+        if (id == created.frame_id)
+          segmentation_->Submit(created.keyframe_id, image, static_cast<std::int64_t>(id));
+      }
+    }
+    return;
+  }
+  // Keyframes come first; an idle worker also takes the other tracked frames (a fast segmenter then sees
+  // every point many more times than the few keyframes that keep it).
+  const Frame* frame = tracker_->last_frame();
+  if (result.state != TrackingState::kOk || frame == nullptr || segmentation_->Busy()) return;
+  FrameObservations observations;
+  for (size_t i = 0; i < frame->map_points.size(); ++i) {
+    if (frame->map_points[i] == nullptr || frame->outliers[i]) continue;
+    observations.points.push_back(frame->map_points[i]);
+    observations.pixels.push_back(frame->features().keypoints[i].pixel);
+  }
+  if (observations.points.empty()) return;
+  const std::uint64_t request = kFrameRequest | frame_id;
+  {
+    std::lock_guard pending(pending_frames_mutex_);
+    pending_frames_[request] = std::move(observations);
+  }
+  segmentation_->Submit(request, left, static_cast<std::int64_t>(frame_id));
+}
+
 void SlamSystem::ResetMap() {
   ++resets_;
   mapper_->RequestStop();
-  while (!mapper_->IsStopped() && !mapper_->IsFinished()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  while (!mapper_->IsStopped() && !mapper_->IsFinished())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   loop_closer_->WaitUntilIdle();
   {
     auto lock = map_->WriteLock();
@@ -122,6 +221,8 @@ void SlamSystem::Finish() {
   loop_closer_->Join();
   mapper_->RequestFinish();
   mapper_->Join();
+  // The keyframe being segmented (and the newest pending one) still count.
+  if (segmentation_) segmentation_->Stop(/*drain=*/true);
   if (options_.final_global_ba && !options_.localization_only) {
     ScopedTimer timer(timing_, "final_global_ba");
     auto lock = map_->WriteLock();
@@ -164,6 +265,8 @@ SlamStatistics SlamSystem::Statistics() const {
   s.relocalizations = static_cast<size_t>(tracker_->num_relocalizations());
   s.loops = loop_closer_->loops().size();
   s.resets = resets_;
+  s.segmented_keyframes = segmented_keyframes_.load();
+  s.segmented_frames = segmented_frames_.load();
   auto lock = map_->ReadLock();
   s.keyframes = map_->NumKeyFrames();
   for (const MapPoint* p : map_->MapPoints()) s.map_points += p->is_bad() ? 0 : 1;

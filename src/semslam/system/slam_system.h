@@ -2,12 +2,15 @@
 // The SLAM system: owns the map, the vocabulary and keyframe database, and the tracking, local-mapping and
 // loop-closing modules (the last two in their own threads). The only place that knows them all.
 
+#include <atomic>
+#include <deque>
 #include <filesystem>
 #include <memory>
+#include <mutex>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
-
-#include <opencv2/core/mat.hpp>
+#include <unordered_map>
 
 #include "semslam/core/timing.h"
 #include "semslam/geometry/camera.h"
@@ -16,6 +19,7 @@
 #include "semslam/map/map.h"
 #include "semslam/map/map_file.h"
 #include "semslam/mapping/local_mapper.h"
+#include "semslam/semantics/segmentation_worker.h"
 #include "semslam/tracking/tracker.h"
 
 namespace semslam {
@@ -35,8 +39,11 @@ struct SlamOptions {
   TrackerOptions tracker;
   LocalMapperOptions mapper;
   LoopCloserOptions loop;
-  std::filesystem::path vocabulary;    // empty: the default vocabulary
-  bool localization_only = false;      // track against a loaded map without changing it
+  std::filesystem::path vocabulary;  // empty: the default vocabulary
+  bool localization_only = false;    // track against a loaded map without changing it
+  // Keep points on moving classes (person, rider, vehicles) out of tracking, relocalization and new points;
+  // takes effect once keyframes are segmented (EnableSegmentation).
+  bool exclude_dynamic = false;
   // A full bundle adjustment of the whole map when the sequence ends (trajectories follow their keyframes).
   bool final_global_ba = true;
   int final_global_ba_iterations = 20;
@@ -52,6 +59,8 @@ struct SlamStatistics {
   size_t loops = 0;
   size_t relocalizations = 0;
   size_t resets = 0;
+  size_t segmented_keyframes = 0;  // keyframes whose segmentation was fused
+  size_t segmented_frames = 0;     // other tracked frames segmented while the worker had time
 };
 
 class SlamSystem {
@@ -64,6 +73,12 @@ class SlamSystem {
   // Loads a map saved by SaveMap before the first frame; tracking then starts by relocalizing.
   MapFileContents LoadMap(const std::filesystem::path& path);
   void SaveMap(const std::filesystem::path& path, const MapFileContents& extra = {}) const;
+
+  // Segments keyframes with `segmenter` on a worker thread of its own (tracking never waits for it; when it
+  // falls behind it takes the newest keyframe) and fuses each result into the map (paper §III-B): the points
+  // the keyframe sees now, and those that gain an observation in it later. Call before the first frame.
+  void EnableSegmentation(std::shared_ptr<Segmenter> segmenter);
+  std::optional<SegmentationWorkerStats> SegmentationStats() const;
 
   TrackingResult ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                               const cv::Mat& right = {}, const cv::Mat& mask = {});
@@ -85,6 +100,8 @@ class SlamSystem {
 
  private:
   void ResetMap();
+  void OnSegmentation(SegmentationResult&& result);
+  void SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left, const TrackingResult& result);
 
   SlamOptions options_;
   PinholeCamera camera_;
@@ -104,6 +121,19 @@ class SlamSystem {
   bool finished_ = false;
   // Trajectory records of maps that were reset (kept so no frame record is lost).
   std::vector<FrameRecord> old_records_;
+  std::unique_ptr<SegmentationWorker> segmentation_;
+  std::atomic<size_t> segmented_keyframes_{0};
+  std::atomic<size_t> segmented_frames_{0};
+  // Frames (not keyframes) sent to the segmentation worker, by request id: the points they matched and where.
+  struct FrameObservations {
+    std::vector<MapPoint*> points;
+    std::vector<Eigen::Vector2f> pixels;
+  };
+  std::mutex pending_frames_mutex_;
+  std::unordered_map<std::uint64_t, FrameObservations> pending_frames_;
+  // The last frames' images: a monocular initialization makes a keyframe of an earlier frame.
+  static constexpr size_t kRecentImages = 32;
+  std::deque<std::pair<std::uint64_t, cv::Mat>> recent_images_;
 };
 
 }  // namespace semslam

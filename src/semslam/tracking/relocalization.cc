@@ -59,7 +59,7 @@ std::vector<KeyFrame*> DetectRelocalizationCandidates(const Frame& frame, const 
 }
 
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
-                     const std::function<int(Frame&)>& optimize_pose) {
+                     const std::function<int(Frame&)>& optimize_pose, bool exclude_dynamic) {
   const std::vector<KeyFrame*> candidates = DetectRelocalizationCandidates(frame, database, map);
   const auto& camera = frame.data().camera;
   for (KeyFrame* kf : candidates) {
@@ -69,7 +69,8 @@ bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& 
     Points3d world_points, bearings;
     std::vector<size_t> slots;
     for (size_t i = 0; i < matches.size(); ++i) {
-      if (matches[i] == nullptr || matches[i]->is_bad()) continue;
+      if (matches[i] == nullptr || matches[i]->is_bad() || (exclude_dynamic && matches[i]->IsDynamic()))
+        continue;
       world_points.push_back(matches[i]->position());
       bearings.push_back(camera.Unproject(frame.features().keypoints[i].pixel.cast<double>()));
       slots.push_back(i);

@@ -20,7 +20,8 @@ std::vector<KeyFrame*> DetectRelocalizationCandidates(const Frame& frame, const 
 // Tries the candidates until one gives a pose with at least 50 inliers. `optimize_pose` refines the frame
 // pose from frame.map_points and sets frame.outliers, returning the inlier count. On success the frame has
 // its pose and matches. Read lock.
+// With `exclude_dynamic`, points labeled as moving classes are not used.
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
-                     const std::function<int(Frame&)>& optimize_pose);
+                     const std::function<int(Frame&)>& optimize_pose, bool exclude_dynamic = false);
 
 }  // namespace semslam

@@ -1,11 +1,11 @@
 #include "semslam/tracking/tracker.h"
 
+#include <spdlog/spdlog.h>
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <map>
 #include <set>
-
-#include <spdlog/spdlog.h>
-#include <tbb/parallel_invoke.h>
 
 #include "semslam/core/error.h"
 #include "semslam/features/matching.h"
@@ -62,7 +62,8 @@ Tracker::Tracker(const TrackerOptions& options, const PinholeCamera& camera, std
   extractor_ = std::make_unique<OrbExtractor>(options_.orb);
   if (!options_.monocular) right_extractor_ = std::make_unique<OrbExtractor>(options_.orb);
   OrbOptions init = options_.orb;
-  init.num_features = options_.init_num_features > 0 ? options_.init_num_features : 2 * options_.orb.num_features;
+  init.num_features =
+      options_.init_num_features > 0 ? options_.init_num_features : 2 * options_.orb.num_features;
   init_extractor_ = std::make_unique<OrbExtractor>(init);
 }
 
@@ -101,11 +102,13 @@ std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, c
                        std::move(stereo.depth));
 }
 
-TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left, const cv::Mat& right,
-                              const cv::Mat& mask) {
+TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
+                              const cv::Mat& right, const cv::Mat& mask) {
   Stopwatch watch;
+  new_keyframes_.clear();
   const bool mono_init = options_.monocular && state_ == TrackingState::kNotInitialized;
-  Frame frame(frame_id, timestamp, ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
+  Frame frame(frame_id, timestamp,
+              ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
   TrackingResult result;
 
   if (state_ == TrackingState::kNotInitialized) {
@@ -172,6 +175,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   }
   records_.push_back(record);
   result.state = state_;
+  result.new_keyframes = new_keyframes_;
   if (result.relocalized) ++num_relocalizations_;
   last_frame_ = std::make_unique<Frame>(std::move(frame));
   timing_.Add("tracking", watch.ElapsedMs());
@@ -187,6 +191,19 @@ void Tracker::ReplaceMergedPoints(Frame& frame) const {
   }
 }
 
+int Tracker::DropDynamicMatches(Frame& frame) const {
+  int kept = 0;
+  for (auto& p : frame.map_points) {
+    if (p == nullptr) continue;
+    if (options_.exclude_dynamic && p->IsDynamic()) {
+      p = nullptr;
+    } else {
+      ++kept;
+    }
+  }
+  return kept;
+}
+
 void Tracker::ComputeBow(Frame& frame) const {
   if (frame.has_bow) return;
   vocabulary_.Transform(frame.features().descriptors, &frame.bow, &frame.feature_vector);
@@ -198,6 +215,7 @@ bool Tracker::InitializeStereo(Frame& frame) {
   auto lock = map_.WriteLock();
   frame.SetPose(Rigid3d());
   KeyFrame* kf = map_.AddKeyFrame(frame);
+  new_keyframes_.push_back({kf->id(), frame.id()});
   int created = 0;
   for (size_t i = 0; i < frame.num_features(); ++i) {
     const auto world = kf->UnprojectStereo(static_cast<int>(i));
@@ -235,14 +253,16 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   }
   std::vector<int> matches12 =
       MatchForInitialization(init_frame_->features(), frame.features(), init_prior_positions_, 100);
-  const int num_matches = static_cast<int>(std::count_if(matches12.begin(), matches12.end(), [](int m) { return m >= 0; }));
+  const int num_matches =
+      static_cast<int>(std::count_if(matches12.begin(), matches12.end(), [](int m) { return m >= 0; }));
   if (num_matches < options_.init_min_matches) {
     init_frame_.reset();
     return false;
   }
   // The next frame searches around where each feature was seen last, so the windows follow the motion.
   for (size_t i = 0; i < matches12.size(); ++i) {
-    if (matches12[i] >= 0) init_prior_positions_[i] = frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel;
+    if (matches12[i] >= 0)
+      init_prior_positions_[i] = frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel;
   }
 
   std::vector<Eigen::Vector2d> pixels1, pixels2;
@@ -269,6 +289,8 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   frame.SetPose(two_view.camera2_from_camera1);
   KeyFrame* kf1 = map_.AddKeyFrame(*init_frame_);
   KeyFrame* kf2 = map_.AddKeyFrame(frame);
+  new_keyframes_.push_back({kf1->id(), init_frame_->id()});
+  new_keyframes_.push_back({kf2->id(), frame.id()});
   for (size_t m = 0; m < two_view.points.size(); ++m) {
     if (!two_view.triangulated[m]) continue;
     const int i1 = index1[m];
@@ -283,15 +305,15 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   }
   kf1->UpdateConnections();
   kf2->UpdateConnections();
-  spdlog::info("monocular map initialized from frames {} and {} with {} points ({})", init_frame_->id(), frame.id(),
-               map_.NumMapPoints(), two_view.model);
+  spdlog::info("monocular map initialized from frames {} and {} with {} points ({})", init_frame_->id(),
+               frame.id(), map_.NumMapPoints(), two_view.model);
 
   // Full bundle adjustment of the two views, then the scale: median scene depth 1.
   GlobalBundleAdjustment(map_, 20, nullptr);
   const double median_depth = kf1->SceneDepthQuantile(2);
   if (median_depth <= 0 || kf2->CountTrackedPoints(1) < options_.init_min_points) {
-    spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(), median_depth,
-                  kf2->CountTrackedPoints(1));
+    spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(),
+                  median_depth, kf2->CountTrackedPoints(1));
     map_.Clear();
     init_frame_.reset();
     return false;
@@ -340,6 +362,10 @@ int Tracker::OptimizeFramePose(Frame& frame) {
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* p = frame.map_points[i];
     if (p == nullptr) continue;
+    if (options_.exclude_dynamic && p->IsDynamic()) {
+      frame.map_points[i] = nullptr;
+      continue;
+    }
     const Keypoint& kp = data.features.keypoints[i];
     PoseObservation obs;
     obs.point = p->position();
@@ -364,9 +390,9 @@ int Tracker::OptimizeFramePose(Frame& frame) {
 bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
   ComputeBow(frame);
   std::vector<MapPoint*> matches;
-  const int n = SearchByBow(*reference_keyframe_, frame, matches, 0.7f);
-  if (n < 15) return false;
+  SearchByBow(*reference_keyframe_, frame, matches, 0.7f);
   frame.map_points = matches;
+  if (DropDynamicMatches(frame) < 15) return false;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   frame.SetPose(last_frame_->camera_from_world());
   OptimizeFramePose(frame);
@@ -388,9 +414,11 @@ bool Tracker::TrackWithMotionModel(Frame& frame) {
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
   const float radius = options_.monocular ? 15.0f : 7.0f;
   int n = SearchFromLastFrame(frame, *last_frame_, radius, options_.monocular);
+  n = DropDynamicMatches(frame);
   if (n < 20) {
     std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-    n = SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
+    SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
+    n = DropDynamicMatches(frame);
   }
   if (n < 20) return false;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
@@ -483,6 +511,7 @@ void Tracker::SearchLocalMapPoints(Frame& frame) {
   for (MapPoint* p : local_points_) {
     p->track_in_view = false;
     if (p->tracking_last_seen_frame == frame.id() || p->is_bad()) continue;
+    if (options_.exclude_dynamic && p->IsDynamic()) continue;
     const Eigen::Vector3d in_camera = frame.camera_from_world() * p->position();
     if (in_camera.z() <= 0) continue;
     const Eigen::Vector2d uv = data.camera.Project(in_camera);
@@ -524,7 +553,8 @@ bool Tracker::TrackLocalMap(Frame& frame) {
       frame.map_points[i] = nullptr;
     }
   }
-  if (frame.id() < last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes) &&
+  if (frame.id() <
+          last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes) &&
       inliers_ < 50) {
     return false;
   }
@@ -561,8 +591,9 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
 
   const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;
   const bool c1a = frame.id() >= last_kf_frame + max_frames;
-  const bool c1b = frame.id() >= last_kf_frame + static_cast<std::uint64_t>(options_.min_frames_between_keyframes) &&
-                   mapper_idle;
+  const bool c1b =
+      frame.id() >= last_kf_frame + static_cast<std::uint64_t>(options_.min_frames_between_keyframes) &&
+      mapper_idle;
   const bool c1c = !options_.monocular && (inliers_ < reference_matches * 0.25 || need_close);
   const bool c2 = (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
@@ -575,6 +606,7 @@ void Tracker::CreateNewKeyFrame(Frame& frame) {
   if (!mapper_->SetNotStop(true)) return;
   auto lock = map_.WriteLock();
   KeyFrame* kf = map_.AddKeyFrame(frame);
+  new_keyframes_.push_back({kf->id(), frame.id()});
   reference_keyframe_ = kf;
   frame.reference_keyframe = kf;
   if (!options_.monocular) {
@@ -613,7 +645,8 @@ void Tracker::CreateNewKeyFrame(Frame& frame) {
 bool Tracker::Relocalize(Frame& frame) {
   ScopedTimer timer(timing_, "relocalization");
   ComputeBow(frame);
-  const bool ok = RelocalizeFrame(frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); });
+  const bool ok = RelocalizeFrame(
+      frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); }, options_.exclude_dynamic);
   if (!ok) return false;
   last_relocalization_frame_ = frame.id();
   velocity_.reset();

@@ -5,10 +5,9 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core/mat.hpp>
 #include <optional>
 #include <vector>
-
-#include <opencv2/core/mat.hpp>
 
 #include "semslam/core/timing.h"
 #include "semslam/features/orb_extractor.h"
@@ -24,12 +23,15 @@ class LocalMapper;
 
 struct TrackerOptions {
   bool monocular = true;
-  OrbOptions orb;                  // for tracking frames
-  int init_num_features = 0;       // features for monocular initialization frames (0 = 2 x orb.num_features)
+  OrbOptions orb;             // for tracking frames
+  int init_num_features = 0;  // features for monocular initialization frames (0 = 2 x orb.num_features)
   int max_frames_between_keyframes = 10;  // usually the frame rate
   int min_frames_between_keyframes = 0;
-  double close_depth_baselines = 40.0;    // stereo: points closer than this many baselines are "close"
-  bool localization_only = false;         // track against the map without changing it
+  double close_depth_baselines = 40.0;  // stereo: points closer than this many baselines are "close"
+  bool localization_only = false;       // track against the map without changing it
+  // Keep map points whose fused label is a moving class (person, rider, vehicles) out of tracking and
+  // relocalization (they need a segmenter to be known).
+  bool exclude_dynamic = false;
   int init_min_matches = 100;
   // Monocular initialization accepts a two-view reconstruction when the init_parallax_rank-th most
   // parallax-rich point has at least init_min_parallax_deg (see geometry/two_view.h).
@@ -43,13 +45,21 @@ struct TrackerOptions {
 enum class TrackingState { kNotInitialized, kOk, kLost };
 const char* ToString(TrackingState state);
 
+// A keyframe made while tracking a frame, and the frame it was made of (monocular initialization makes the
+// first keyframe of an earlier frame).
+struct NewKeyFrame {
+  std::uint64_t keyframe_id = 0;
+  std::uint64_t frame_id = 0;
+};
+
 // What happened to one frame.
 struct TrackingResult {
   TrackingState state = TrackingState::kNotInitialized;
   bool initialized_now = false;
   bool relocalized = false;
   bool new_keyframe = false;
-  bool reset_requested = false;  // lost right after initialization: the System should reset the map
+  std::vector<NewKeyFrame> new_keyframes;  // including those of an initialization
+  bool reset_requested = false;            // lost right after initialization: the System should reset the map
   int matched_points = 0;
   std::optional<Rigid3d> camera_from_world;
 };
@@ -59,23 +69,26 @@ struct TrackingResult {
 struct FrameRecord {
   std::uint64_t frame_id = 0;
   double timestamp = 0.0;
-  KeyFrame* reference = nullptr;      // nullptr when the frame was not tracked
+  KeyFrame* reference = nullptr;  // nullptr when the frame was not tracked
   Rigid3d camera_from_reference;
 };
 
 class Tracker {
  public:
-  Tracker(const TrackerOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo, Map& map,
-          const Vocabulary& vocabulary, KeyFrameDatabase& database, LocalMapper* mapper, TimingRegistry& timing);
+  Tracker(const TrackerOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo,
+          Map& map, const Vocabulary& vocabulary, KeyFrameDatabase& database, LocalMapper* mapper,
+          TimingRegistry& timing);
   ~Tracker();
 
   // Tracks one frame. `right` is empty for monocular input; `mask` (optional, 8-bit, non-zero = keep)
   // excludes image regions from feature extraction.
-  TrackingResult Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left, const cv::Mat& right = {},
-                       const cv::Mat& mask = {});
+  TrackingResult Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
+                       const cv::Mat& right = {}, const cv::Mat& mask = {});
 
   TrackingState state() const { return state_; }
   const std::vector<FrameRecord>& records() const { return records_; }
+  // The frame tracked last (its matches to map points, outliers removed); nullptr before the first.
+  const Frame* last_frame() const { return last_frame_.get(); }
   int num_relocalizations() const { return num_relocalizations_; }
   // Starts from a loaded map: the next frame is relocalized instead of initializing.
   void SetMapLoaded();
@@ -83,8 +96,8 @@ class Tracker {
   void Reset();
 
  private:
-  std::shared_ptr<const FrameData> ExtractFeatures(const cv::Mat& left, const cv::Mat& right, const cv::Mat& mask,
-                                                   bool initialization);
+  std::shared_ptr<const FrameData> ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
+                                                   const cv::Mat& mask, bool initialization);
   bool InitializeMonocular(Frame& frame);
   bool InitializeStereo(Frame& frame);
   bool TrackReferenceKeyFrame(Frame& frame);
@@ -97,6 +110,8 @@ class Tracker {
   bool NeedNewKeyFrame(const Frame& frame) const;
   void CreateNewKeyFrame(Frame& frame);
   void ComputeBow(Frame& frame) const;
+  // Clears matches to moving points when exclude_dynamic is set; returns the matches left.
+  int DropDynamicMatches(Frame& frame) const;
   void ReplaceMergedPoints(Frame& frame) const;
 
   TrackerOptions options_;
@@ -113,7 +128,7 @@ class Tracker {
 
   TrackingState state_ = TrackingState::kNotInitialized;
   std::unique_ptr<Frame> last_frame_;
-  std::optional<Rigid3d> velocity_;   // current_from_last of the previous step
+  std::optional<Rigid3d> velocity_;  // current_from_last of the previous step
   int last_big_change_ = 0;
   std::uint64_t last_relocalization_frame_ = 0;
   KeyFrame* last_keyframe_ = nullptr;
@@ -129,6 +144,7 @@ class Tracker {
   std::vector<Eigen::Vector2f> init_prior_positions_;
 
   std::vector<FrameRecord> records_;
+  std::vector<NewKeyFrame> new_keyframes_;  // of the frame being tracked
 };
 
 }  // namespace semslam
