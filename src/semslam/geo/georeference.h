@@ -11,7 +11,8 @@ struct Georeference {
   EnuFrame enu_frame;
   Sim3d enu_from_map;
 
-  Georeference(EnuFrame frame, const Sim3d& enu_from_map_in) : enu_frame(std::move(frame)), enu_from_map(enu_from_map_in) {}
+  Georeference(EnuFrame frame, const Sim3d& enu_from_map_in)
+      : enu_frame(std::move(frame)), enu_from_map(enu_from_map_in) {}
 
   Eigen::Vector3d MapToEnu(const Eigen::Vector3d& map_point) const { return enu_from_map * map_point; }
   Eigen::Vector3d EnuToMap(const Eigen::Vector3d& enu) const { return enu_from_map.Inverse() * enu; }
