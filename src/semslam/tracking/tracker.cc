@@ -13,6 +13,7 @@
 #include "semslam/geometry/two_view.h"
 #include "semslam/map/map_matcher.h"
 #include "semslam/mapping/local_mapper.h"
+#include "semslam/mapping/map_optimization.h"
 #include "semslam/optim/bundle_adjustment.h"
 #include "semslam/optim/pose_optimization.h"
 #include "semslam/place/keyframe_database.h"
@@ -400,7 +401,7 @@ bool Tracker::TrackWithMotionModel(Frame& frame) {
 
 void Tracker::UpdateLocalMap(Frame& frame) {
   // Keyframes that see the frame's points, weighted by how many they see.
-  std::map<KeyFrame*, int> counter;
+  std::map<KeyFrame*, int, ById> counter;
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* p = frame.map_points[i];
     if (p == nullptr) continue;

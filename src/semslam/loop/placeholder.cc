@@ -1,1 +1,0 @@
-// Placeholder until the loop module has sources.

@@ -1,0 +1,330 @@
+#include "semslam/optim/bundle_adjustment.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "semslam/core/error.h"
+#include "semslam/optim/cost_functions.h"
+#include "semslam/optim/internal.h"
+#include "semslam/optim/manifolds.h"
+
+namespace semslam {
+
+void BundleAdjustmentOptions::Check() const {
+  Require(iterations >= 1, "bundle adjustment: iterations must be >= 1");
+  Require(refine_iterations >= 1, "bundle adjustment: refine_iterations must be >= 1");
+  Require(std::isfinite(chi2_mono) && chi2_mono > 0, "bundle adjustment: chi2_mono must be positive");
+  Require(std::isfinite(chi2_stereo) && chi2_stereo > 0, "bundle adjustment: chi2_stereo must be positive");
+  Require(num_threads >= 1, "bundle adjustment: num_threads must be >= 1");
+  Require(solver == BundleAdjustmentSolver::kAuto || solver == BundleAdjustmentSolver::kDenseSchur ||
+              solver == BundleAdjustmentSolver::kSparseSchur ||
+              solver == BundleAdjustmentSolver::kIterativeSchur,
+          "bundle adjustment: unknown solver");
+}
+
+namespace {
+
+using optim_internal::kRigidSize;
+
+struct Intrinsics {
+  double fx, fy, cx, cy, bf;
+};
+
+// Whitened reprojection error (prediction - measurement) of a camera-frame point p (p.z() > 0).
+template <int N>
+inline void Residual(const Intrinsics& k, const Eigen::Vector3d& p, const Eigen::Vector2d& pixel,
+                     double right_u, double sqrt_info, double* e) {
+  const double iz = 1.0 / p.z();
+  const double u = k.fx * p.x() * iz + k.cx;
+  e[0] = sqrt_info * (u - pixel.x());
+  e[1] = sqrt_info * (k.fy * p.y() * iz + k.cy - pixel.y());
+  if constexpr (N == 3) e[2] = sqrt_info * (u - k.bf * iz - right_u);
+}
+
+// Reprojection of a world point into a camera: parameters camera_from_world [q, t] (RigidLeftManifold) and
+// the point. N = 2: (u, v); N = 3: (u, v, u_right).
+template <int N>
+class ReprojectionCost final : public ceres::SizedCostFunction<N, kRigidSize, 3> {
+ public:
+  ReprojectionCost(const Intrinsics& k, const Eigen::Vector2d& pixel, double right_u, double sqrt_info)
+      : k_(k), pixel_(pixel), right_u_(right_u), sqrt_info_(sqrt_info) {}
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Eigen::Map<const Eigen::Quaterniond> q(parameters[0]);
+    const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
+    const Eigen::Map<const Eigen::Vector3d> x(parameters[1]);
+    const Eigen::Vector3d p = q * x + t;
+    if (!(p.z() > 1e-9)) return false;  // a step that puts the point behind the camera is rejected
+    Residual<N>(k_, p, pixel_, right_u_, sqrt_info_, residuals);
+    if (jacobians == nullptr) return true;
+    const double iz = 1.0 / p.z();
+    const double s = sqrt_info_ * iz;
+    Eigen::Matrix<double, N, 3, Eigen::RowMajor> a;
+    a.row(0) << s * k_.fx, 0.0, -s * k_.fx * p.x() * iz;
+    a.row(1) << 0.0, s * k_.fy, -s * k_.fy * p.y() * iz;
+    if constexpr (N == 3) a.row(2) << s * k_.fx, 0.0, -s * (k_.fx * p.x() - k_.bf) * iz;
+    if (jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, N, kRigidSize, Eigen::RowMajor>> j(jacobians[0]);
+      for (int r = 0; r < N; ++r) {
+        const Eigen::Vector3d row = a.row(r).transpose();
+        j.template block<1, 3>(r, 0) = row.transpose();
+        j.template block<1, 3>(r, 3) = p.cross(row).transpose();
+        j(r, 6) = 0.0;
+      }
+    }
+    if (jacobians[1] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, N, 3, Eigen::RowMajor>> j(jacobians[1]);
+      j.noalias() = a * q.toRotationMatrix();
+    }
+    return true;
+  }
+
+ private:
+  Intrinsics k_;
+  Eigen::Vector2d pixel_;
+  double right_u_;
+  double sqrt_info_;
+};
+
+class AbortCallback final : public ceres::IterationCallback {
+ public:
+  explicit AbortCallback(std::atomic<bool>* abort) : abort_(abort) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return abort_->load(std::memory_order_relaxed) ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  std::atomic<bool>* abort_;
+};
+
+void Validate(const BundleAdjustmentProblem& problem) {
+  if (!problem.observations.empty()) optim_internal::RequirePinhole(problem.camera, "bundle adjustment");
+  Require(std::isfinite(problem.baseline) && problem.baseline >= 0,
+          "bundle adjustment: baseline must be finite and >= 0");
+  Require(problem.pose_fixed.size() == problem.camera_from_world.size(),
+          "bundle adjustment: pose_fixed must hold one flag per pose");
+  for (size_t i = 0; i < problem.camera_from_world.size(); ++i) {
+    const Rigid3d& t = problem.camera_from_world[i];
+    if (!t.translation.allFinite() || !t.rotation.coeffs().allFinite()) {
+      throw InvalidArgument("bundle adjustment: pose " + std::to_string(i) + " is not finite");
+    }
+  }
+  for (size_t j = 0; j < problem.points.size(); ++j) {
+    if (!problem.points[j].allFinite()) {
+      throw InvalidArgument("bundle adjustment: point " + std::to_string(j) + " is not finite");
+    }
+  }
+  const int num_poses = static_cast<int>(problem.camera_from_world.size());
+  const int num_points = static_cast<int>(problem.points.size());
+  for (size_t i = 0; i < problem.observations.size(); ++i) {
+    const BundleAdjustmentObservation& o = problem.observations[i];
+    const std::string which = "bundle adjustment: observation " + std::to_string(i);
+    if (o.pose < 0 || o.pose >= num_poses || o.point < 0 || o.point >= num_points) {
+      throw InvalidArgument(which + " refers to a pose or point out of range");
+    }
+    if (!o.pixel.allFinite() || !std::isfinite(o.right_u) || !std::isfinite(o.inv_sigma2) ||
+        !(o.inv_sigma2 > 0)) {
+      throw InvalidArgument(which + " has a non-finite value or inv_sigma2 <= 0");
+    }
+    if (o.right_u >= 0 && !(problem.baseline > 0)) {
+      throw InvalidArgument(which + " is stereo (right_u >= 0) but the baseline is not positive");
+    }
+  }
+}
+
+ceres::LinearSolverType LinearSolver(BundleAdjustmentSolver solver, int num_free_poses) {
+  switch (solver) {
+    case BundleAdjustmentSolver::kDenseSchur:
+      return ceres::DENSE_SCHUR;
+    case BundleAdjustmentSolver::kSparseSchur:
+      return ceres::SPARSE_SCHUR;
+    case BundleAdjustmentSolver::kIterativeSchur:
+      return ceres::ITERATIVE_SCHUR;
+    case BundleAdjustmentSolver::kAuto:
+      break;
+  }
+  return num_free_poses <= 60 ? ceres::DENSE_SCHUR : ceres::SPARSE_SCHUR;
+}
+
+double Chi2Threshold(const BundleAdjustmentObservation& o, const BundleAdjustmentOptions& options) {
+  return o.right_u >= 0 ? options.chi2_stereo : options.chi2_mono;
+}
+
+}  // namespace
+
+ceres::CostFunction* optim_internal::NewReprojectionCost(const PinholeCamera& camera, double bf,
+                                                         const Eigen::Vector2d& pixel, double right_u,
+                                                         double sqrt_info) {
+  const Intrinsics k{camera.fx, camera.fy, camera.cx, camera.cy, bf};
+  if (right_u >= 0) return new ReprojectionCost<3>(k, pixel, right_u, sqrt_info);
+  return new ReprojectionCost<2>(k, pixel, right_u, sqrt_info);
+}
+
+double ReprojectionChi2(const BundleAdjustmentProblem& problem, const BundleAdjustmentObservation& o) {
+  const Eigen::Vector3d p =
+      problem.camera_from_world[static_cast<size_t>(o.pose)] * problem.points[static_cast<size_t>(o.point)];
+  if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
+  const Intrinsics k{problem.camera.fx, problem.camera.fy, problem.camera.cx, problem.camera.cy,
+                     problem.camera.fx * problem.baseline};
+  double e[3] = {0, 0, 0};
+  const double sqrt_info = std::sqrt(o.inv_sigma2);
+  if (o.right_u >= 0) {
+    Residual<3>(k, p, o.pixel, o.right_u, sqrt_info, e);
+  } else {
+    Residual<2>(k, p, o.pixel, o.right_u, sqrt_info, e);
+  }
+  return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+}
+
+BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
+                                    const BundleAdjustmentOptions& options) {
+  options.Check();
+  Validate(problem);
+  const size_t num_obs = problem.observations.size();
+  BundleAdjustmentResult result;
+  result.outlier.assign(num_obs, false);
+  if (num_obs == 0) return result;
+
+  const Intrinsics k{problem.camera.fx, problem.camera.fy, problem.camera.cx, problem.camera.cy,
+                     problem.camera.fx * problem.baseline};
+  std::vector<double> initial_chi2(num_obs);
+  for (size_t i = 0; i < num_obs; ++i) initial_chi2[i] = ReprojectionChi2(problem, problem.observations[i]);
+
+  // Parameters: poses packed as [q, t], points as they are.
+  std::vector<double> poses(problem.camera_from_world.size() * kRigidSize);
+  for (size_t i = 0; i < problem.camera_from_world.size(); ++i) {
+    optim_internal::PackRigid(problem.camera_from_world[i], &poses[i * kRigidSize]);
+  }
+  std::vector<double> points(problem.points.size() * 3);
+  for (size_t j = 0; j < problem.points.size(); ++j)
+    Eigen::Map<Eigen::Vector3d>{&points[j * 3]} = problem.points[j];
+
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = options.refine_without_outliers;
+  ceres::Problem ceres_problem(problem_options);
+  optim_internal::RigidLeftManifold manifold;
+  ceres::LossFunctionWrapper loss_mono(new ceres::HuberLoss(std::sqrt(options.chi2_mono)),
+                                       ceres::TAKE_OWNERSHIP);
+  ceres::LossFunctionWrapper loss_stereo(new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
+                                         ceres::TAKE_OWNERSHIP);
+
+  std::vector<ceres::ResidualBlockId> residual_ids(num_obs, nullptr);
+  std::vector<unsigned char> pose_used(problem.camera_from_world.size(), 0);
+  std::vector<unsigned char> point_used(problem.points.size(), 0);
+  for (size_t i = 0; i < num_obs; ++i) {
+    const BundleAdjustmentObservation& o = problem.observations[i];
+    // Behind its camera from the start: an outlier, kept out of the optimization.
+    if (!std::isfinite(initial_chi2[i])) {
+      result.outlier[i] = true;
+      continue;
+    }
+    const auto pi = static_cast<size_t>(o.pose), pj = static_cast<size_t>(o.point);
+    double* pose = &poses[pi * kRigidSize];
+    double* point = &points[pj * 3];
+    if (!pose_used[pi]) {
+      ceres_problem.AddParameterBlock(pose, kRigidSize, &manifold);
+      if (problem.pose_fixed[pi]) ceres_problem.SetParameterBlockConstant(pose);
+      pose_used[pi] = 1;
+    }
+    point_used[pj] = 1;
+    const double sqrt_info = std::sqrt(o.inv_sigma2);
+    if (o.right_u >= 0) {
+      residual_ids[i] = ceres_problem.AddResidualBlock(
+          new ReprojectionCost<3>(k, o.pixel, o.right_u, sqrt_info), &loss_stereo, pose, point);
+    } else {
+      residual_ids[i] = ceres_problem.AddResidualBlock(
+          new ReprojectionCost<2>(k, o.pixel, o.right_u, sqrt_info), &loss_mono, pose, point);
+    }
+  }
+
+  int num_free_poses = 0;
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (size_t j = 0; j < point_used.size(); ++j) {
+    if (point_used[j]) ordering->AddElementToGroup(&points[j * 3], 0);
+  }
+  for (size_t i = 0; i < pose_used.size(); ++i) {
+    if (!pose_used[i]) continue;
+    ordering->AddElementToGroup(&poses[i * kRigidSize], 1);
+    num_free_poses += problem.pose_fixed[i] ? 0 : 1;
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = LinearSolver(options.solver, num_free_poses);
+  if (solver_options.linear_solver_type == ceres::ITERATIVE_SCHUR) {
+    solver_options.preconditioner_type = ceres::SCHUR_JACOBI;
+  }
+  solver_options.linear_solver_ordering = ordering;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.num_threads = options.num_threads;
+  AbortCallback abort_callback(options.abort);
+  if (options.abort != nullptr) {
+    solver_options.callbacks.push_back(&abort_callback);
+    solver_options.update_state_every_iteration = true;  // an abort keeps the best state found so far
+  }
+
+  auto solve = [&](int iterations) {
+    if (ceres_problem.NumResidualBlocks() == 0) return;
+    solver_options.max_num_iterations = iterations;
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options, &ceres_problem, &summary);
+    result.iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+    if (summary.termination_type == ceres::USER_FAILURE) result.aborted = true;
+  };
+  auto write_back = [&] {
+    for (size_t i = 0; i < problem.camera_from_world.size(); ++i) {
+      if (pose_used[i] && !problem.pose_fixed[i]) {
+        problem.camera_from_world[i] = optim_internal::UnpackRigid(&poses[i * kRigidSize]);
+      }
+    }
+    for (size_t j = 0; j < problem.points.size(); ++j) {
+      if (point_used[j]) problem.points[j] = Eigen::Map<const Eigen::Vector3d>(&points[j * 3]);
+    }
+  };
+
+  solve(options.iterations);
+  write_back();
+  if (options.refine_without_outliers && !result.aborted) {
+    for (size_t i = 0; i < num_obs; ++i) {
+      if (residual_ids[i] == nullptr) continue;
+      const BundleAdjustmentObservation& o = problem.observations[i];
+      if (ReprojectionChi2(problem, o) > Chi2Threshold(o, options)) {
+        result.outlier[i] = true;
+        ceres_problem.RemoveResidualBlock(residual_ids[i]);
+        residual_ids[i] = nullptr;
+      }
+    }
+    loss_mono.Reset(nullptr, ceres::TAKE_OWNERSHIP);
+    loss_stereo.Reset(nullptr, ceres::TAKE_OWNERSHIP);
+    solve(options.refine_iterations);
+    write_back();
+  }
+
+  double initial_sum = 0.0, final_sum = 0.0;
+  int counted = 0;
+  for (size_t i = 0; i < num_obs; ++i) {
+    if (result.outlier[i]) continue;
+    const BundleAdjustmentObservation& o = problem.observations[i];
+    const double chi2 = ReprojectionChi2(problem, o);
+    if (chi2 > Chi2Threshold(o, options)) {  // also catches points now behind the camera (infinite chi2)
+      result.outlier[i] = true;
+      continue;
+    }
+    initial_sum += initial_chi2[i];
+    final_sum += chi2;
+    ++counted;
+  }
+  for (size_t i = 0; i < num_obs; ++i) result.num_outliers += result.outlier[i] ? 1 : 0;
+  if (counted > 0) {
+    result.initial_rms = std::sqrt(initial_sum / counted);
+    result.final_rms = std::sqrt(final_sum / counted);
+  }
+  return result;
+}
+
+}  // namespace semslam

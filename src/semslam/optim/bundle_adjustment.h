@@ -1,0 +1,78 @@
+#pragma once
+// Bundle adjustment of keyframe poses and map points (Triggs et al. 2000) with the outlier handling of
+// ORB-SLAM's local and global BA (Mur-Artal et al. 2015, 2017): Huber kernels at the chi-square thresholds,
+// and optionally a second pass without the kernel after the outliers of the first are dropped. Poses are
+// camera_from_world; the gauge is fixed by the fixed poses (one for stereo, two for monocular maps).
+
+#include <atomic>
+#include <vector>
+
+#include "semslam/geometry/camera.h"
+#include "semslam/geometry/rigid3.h"
+#include "semslam/optim/chi_square.h"
+
+namespace semslam {
+
+struct BundleAdjustmentObservation {
+  int pose = -1;                                    // index into BundleAdjustmentProblem::camera_from_world
+  int point = -1;                                   // index into BundleAdjustmentProblem::points
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  // undistorted keypoint
+  double right_u = -1.0;                            // stereo: u in the right image; < 0: monocular
+  double inv_sigma2 = 1.0;                          // 1 / sigma^2 of the keypoint's pyramid level (> 0)
+};
+
+// In and out: BundleAdjust() writes the optimized poses and points back into the problem.
+struct BundleAdjustmentProblem {
+  PinholeCamera camera;   // ideal pinhole shared by all keyframes
+  double baseline = 0.0;  // stereo baseline in metres (> 0 when any observation has right_u >= 0)
+  std::vector<Rigid3d> camera_from_world;
+  std::vector<bool> pose_fixed;         // one per pose
+  std::vector<Eigen::Vector3d> points;  // world frame
+  std::vector<BundleAdjustmentObservation> observations;
+};
+
+enum class BundleAdjustmentSolver {
+  kAuto,  // dense Schur complement up to 60 free poses, sparse above
+  kDenseSchur,
+  kSparseSchur,
+  kIterativeSchur,
+};
+
+struct BundleAdjustmentOptions {
+  int iterations = 10;  // Levenberg-Marquardt iterations of the (first) pass
+  // ORB-SLAM's local BA: after the first pass, observations failing the chi-square test (or behind their
+  // camera) are dropped and a second pass of `refine_iterations` runs on the rest without the kernel.
+  bool refine_without_outliers = false;
+  int refine_iterations = 10;
+  double chi2_mono = kChi2Mono;      // Huber threshold delta^2 and outlier test, monocular observations
+  double chi2_stereo = kChi2Stereo;  // the same for stereo ones
+  // Set (from another thread) to stop: the solver returns after the current iteration, keeping its progress.
+  std::atomic<bool>* abort = nullptr;
+  BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
+  int num_threads = 1;
+
+  void Check() const;  // throws InvalidArgument
+};
+
+struct BundleAdjustmentResult {
+  // Per observation: failed the chi-square test or lies behind its camera after the optimization (with
+  // refine_without_outliers, also those dropped after the first pass).
+  std::vector<bool> outlier;
+  int num_outliers = 0;
+  int iterations = 0;        // over both passes
+  double initial_rms = 0.0;  // RMS whitened reprojection error over the inliers before ...
+  double final_rms = 0.0;    // ... and after the optimization
+  bool aborted = false;
+};
+
+// Optimizes the free poses and every observed point in place. Throws InvalidArgument on a bad problem
+// (sizes, indices, non-finite values, inv_sigma2 <= 0, a stereo observation without a baseline, a distorted
+// camera). Points observed by no observation are left alone.
+BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
+                                    const BundleAdjustmentOptions& options = {});
+
+// Whitened squared reprojection error (chi-square statistic) of one observation; +infinity behind the camera.
+double ReprojectionChi2(const BundleAdjustmentProblem& problem,
+                        const BundleAdjustmentObservation& observation);
+
+}  // namespace semslam

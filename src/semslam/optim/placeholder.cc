@@ -1,1 +1,0 @@
-// Placeholder until the optim module has sources.

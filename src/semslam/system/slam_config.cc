@@ -1,0 +1,158 @@
+#include "semslam/system/slam_config.h"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <map>
+
+#include "semslam/core/error.h"
+
+namespace semslam {
+namespace {
+
+// One configurable option: how to read it from a node and how to print it.
+struct Field {
+  std::function<void(const YAML::Node&)> read;
+  std::function<void(YAML::Emitter&)> write;
+};
+using Section = std::map<std::string, Field>;
+
+template <typename T>
+Field Bind(T* value) {
+  return {[value](const YAML::Node& node) { *value = node.as<T>(); },
+          [value](YAML::Emitter& out) { out << *value; }};
+}
+
+Field BindPacing(Pacing* pacing) {
+  return {[pacing](const YAML::Node& node) {
+            const std::string s = node.as<std::string>();
+            if (s == "fast") {
+              *pacing = Pacing::kFast;
+            } else if (s == "realtime") {
+              *pacing = Pacing::kRealtime;
+            } else if (s == "synchronous") {
+              *pacing = Pacing::kSynchronous;
+            } else {
+              throw YAML::Exception(node.Mark(), "expected fast, realtime or synchronous");
+            }
+          },
+          [pacing](YAML::Emitter& out) {
+            out << (*pacing == Pacing::kFast       ? "fast"
+                    : *pacing == Pacing::kRealtime ? "realtime"
+                                                   : "synchronous");
+          }};
+}
+
+Field BindPath(std::filesystem::path* path) {
+  return {[path](const YAML::Node& node) { *path = node.as<std::string>(); },
+          [path](YAML::Emitter& out) { out << path->string(); }};
+}
+
+std::map<std::string, Section> Sections(SlamOptions* o) {
+  std::map<std::string, Section> s;
+  s["features"] = {
+      {"num_features", Bind(&o->tracker.orb.num_features)},
+      {"init_num_features", Bind(&o->tracker.init_num_features)},
+      {"num_levels", Bind(&o->tracker.orb.num_levels)},
+      {"scale_factor", Bind(&o->tracker.orb.scale_factor)},
+      {"initial_fast_threshold", Bind(&o->tracker.orb.initial_fast_threshold)},
+      {"min_fast_threshold", Bind(&o->tracker.orb.min_fast_threshold)},
+  };
+  s["tracking"] = {
+      {"max_frames_between_keyframes", Bind(&o->tracker.max_frames_between_keyframes)},
+      {"min_frames_between_keyframes", Bind(&o->tracker.min_frames_between_keyframes)},
+      {"close_depth_baselines", Bind(&o->tracker.close_depth_baselines)},
+      {"init_min_matches", Bind(&o->tracker.init_min_matches)},
+      {"pacing", BindPacing(&o->pacing)},
+  };
+  s["mapping"] = {
+      {"triangulation_neighbours_mono", Bind(&o->mapper.triangulation_neighbours_mono)},
+      {"triangulation_neighbours_stereo", Bind(&o->mapper.triangulation_neighbours_stereo)},
+      {"redundant_keyframe_ratio", Bind(&o->mapper.redundant_keyframe_ratio)},
+      {"local_ba_iterations", Bind(&o->mapper.local_ba_iterations)},
+  };
+  s["loop"] = {
+      {"enabled", Bind(&o->loop.enabled)},
+      {"consistency_threshold", Bind(&o->loop.consistency_threshold)},
+      {"min_keyframes_between_loops", Bind(&o->loop.min_keyframes_between_loops)},
+      {"min_bow_matches", Bind(&o->loop.min_bow_matches)},
+      {"min_sim3_inliers", Bind(&o->loop.min_sim3_inliers)},
+      {"min_projected_matches", Bind(&o->loop.min_projected_matches)},
+      {"global_ba", Bind(&o->loop.global_ba)},
+      {"global_ba_iterations", Bind(&o->loop.global_ba_iterations)},
+  };
+  s["place"] = {
+      {"vocabulary", BindPath(&o->vocabulary)},
+  };
+  return s;
+}
+
+SourceLocation Where(const std::filesystem::path& file, const YAML::Mark& mark) {
+  return {file, mark.line >= 0 ? mark.line + 1 : 0};
+}
+
+}  // namespace
+
+void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::BadFile&) {
+    throw InputError(file, "cannot open the configuration file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(Where(file, e.mark), e.msg);
+  }
+  if (root.IsNull()) return;  // an empty file changes nothing
+  if (!root.IsMap())
+    throw InputError(Where(file, root.Mark()), "the configuration must be a map of sections");
+  SlamOptions updated = *options;
+  auto sections = Sections(&updated);
+  for (const auto& entry : root) {
+    const std::string section_name = entry.first.as<std::string>();
+    const auto section = sections.find(section_name);
+    if (section == sections.end()) {
+      throw InputError(Where(file, entry.first.Mark()), section_name,
+                       "unknown section (expected features, tracking, mapping, loop or place)");
+    }
+    if (!entry.second.IsMap())
+      throw InputError(Where(file, entry.second.Mark()), section_name, "must be a map");
+    for (const auto& item : entry.second) {
+      const std::string key = item.first.as<std::string>();
+      const std::string field = section_name + "." + key;
+      const auto it = section->second.find(key);
+      if (it == section->second.end()) throw InputError(Where(file, item.first.Mark()), field, "unknown key");
+      try {
+        it->second.read(item.second);
+      } catch (const YAML::Exception& e) {
+        throw InputError(Where(file, item.second.Mark()), field, fmt::format("bad value: {}", e.msg));
+      }
+    }
+  }
+  try {
+    updated.tracker.Check();
+    updated.mapper.Check();
+    updated.loop.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(file, e.what());
+  }
+  *options = updated;
+}
+
+std::string SlamConfigToYaml(const SlamOptions& options) {
+  SlamOptions copy = options;
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  for (auto& [section_name, fields] : Sections(&copy)) {
+    out << YAML::Key << section_name << YAML::Value << YAML::BeginMap;
+    for (auto& [key, field] : fields) {
+      out << YAML::Key << key << YAML::Value;
+      field.write(out);
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace semslam

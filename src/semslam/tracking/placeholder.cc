@@ -1,1 +1,0 @@
-// Placeholder until the tracking module has sources.

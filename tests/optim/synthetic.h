@@ -1,0 +1,46 @@
+#pragma once
+// Synthetic scenes for the optimizer tests: a KITTI-like pinhole camera, points in front of it, noise from
+// fixed seeds.
+
+#include <random>
+
+#include "semslam/geometry/camera.h"
+#include "semslam/geometry/rigid3.h"
+#include "semslam/geometry/sim3.h"
+
+namespace semslam::testing_optim {
+
+inline PinholeCamera KittiCamera() {
+  PinholeCamera c;
+  c.width = 1241;
+  c.height = 376;
+  c.fx = c.fy = 718.856;
+  c.cx = 607.19;
+  c.cy = 185.22;
+  return c;
+}
+
+inline Eigen::Vector3d RandomVector(std::mt19937& rng, double sigma) {
+  std::normal_distribution<double> n(0.0, sigma);
+  return {n(rng), n(rng), n(rng)};
+}
+
+// A point in front of a camera, projecting inside its image: camera frame, depth in [min_depth, max_depth].
+inline Eigen::Vector3d RandomCameraPoint(std::mt19937& rng, const PinholeCamera& c, double min_depth,
+                                         double max_depth) {
+  std::uniform_real_distribution<double> u(5.0, c.width - 6.0), v(5.0, c.height - 6.0),
+      z(min_depth, max_depth);
+  return c.UnprojectDepth({u(rng), v(rng)}, z(rng));
+}
+
+// Small random rigid motion: rotation of about `angle` rad, translation of about `distance` m.
+inline Rigid3d Perturbation(std::mt19937& rng, double angle, double distance) {
+  return Rigid3d(QuaternionExp(RandomVector(rng, angle / std::sqrt(3.0))),
+                 RandomVector(rng, distance / std::sqrt(3.0)));
+}
+
+inline double RotationError(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  return QuaternionLog(a.conjugate() * b).norm();
+}
+
+}  // namespace semslam::testing_optim
