@@ -54,6 +54,12 @@ struct Georeference {
   Eigen::Vector3d EnuToMap(const Eigen::Vector3d& enu) const {
     return local ? local->EnuToMap(enu) : enu_from_map.Inverse() * enu;
   }
+  // Into the map near `map_anchor` (e.g. a keyframe's centre): through that place's correction. Where the
+  // trajectory passes a place twice without a loop closure, the map holds it twice; the anchor says which.
+  Eigen::Vector3d EnuToMapAt(const Eigen::Vector3d& enu, const Eigen::Vector3d& map_anchor) const {
+    return local ? local->keyframes()[local->NearestInMap(map_anchor)].enu_from_map.Inverse() * enu
+                 : enu_from_map.Inverse() * enu;
+  }
   // A point of frame `frame_index` (its camera centre for a trajectory): smooth along the trajectory.
   Eigen::Vector3d FrameToEnu(size_t frame_index, const Eigen::Vector3d& map_point) const {
     return local ? local->FrameToEnu(frame_index, map_point) : enu_from_map * map_point;

@@ -68,7 +68,10 @@ std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogu
     } else if (nearest >= 0) {
       p.keyframe_distance_m = nearest_distance;
     }
-    p.map_position = georeference.EnuToMap(p.enu);
+    // Into the map near the associated keyframe (the same place may be in a drifting map twice).
+    p.map_position =
+        nearest >= 0 ? georeference.EnuToMapAt(p.enu, keyframes[static_cast<size_t>(nearest)].map_position)
+                     : georeference.EnuToMap(p.enu);
     placed.push_back(std::move(p));
   }
   return placed;

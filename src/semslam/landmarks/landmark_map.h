@@ -53,7 +53,8 @@ struct PlacedLandmark {
 };
 
 // Transforms the catalogue into the map and associates each landmark with its nearest keyframe (horizontal
-// ENU distance). `keyframes` may be empty (no association).
+// ENU distance); the map position goes through that keyframe's place (Georeference::EnuToMapAt). `keyframes`
+// may be empty (no association).
 std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogue,
                                            const Georeference& georeference, const FramePositions& keyframes,
                                            const LandmarkOptions& options = {});
@@ -99,5 +100,11 @@ MembershipRaster RasterizeMembership(const std::vector<PlacedLandmark>& landmark
 // membership_pdf, and sigma_m.
 void WriteLandmarksGeoJson(const std::filesystem::path& path, const std::vector<PlacedLandmark>& landmarks,
                            const FramePositions& keyframes, double sigma_m);
+
+// Placed landmarks as compact JSON (for the map file's extra sections) and back; the parser throws InputError
+// naming `source` and the field.
+std::string PlacedLandmarksToJson(const std::vector<PlacedLandmark>& landmarks);
+std::vector<PlacedLandmark> PlacedLandmarksFromJson(const std::string& text,
+                                                    const std::filesystem::path& source);
 
 }  // namespace semslam
