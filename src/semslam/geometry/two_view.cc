@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <future>
@@ -32,7 +33,7 @@ void TwoViewOptions::Check() const {
   Require(min_point_parallax_deg >= 0 && min_point_parallax_deg < 90,
           "two-view: min_point_parallax_deg must be in [0, 90)");
   Require(min_parallax_deg >= 0 && min_parallax_deg < 90, "two-view: min_parallax_deg must be in [0, 90)");
-  Require(parallax_quantile >= 0 && parallax_quantile <= 1, "two-view: parallax_quantile must be in [0, 1]");
+  Require(parallax_rank >= 1, "two-view: parallax_rank must be >= 1");
   Require(min_good_points >= 1, "two-view: min_good_points must be >= 1");
   Require(min_good_ratio >= 0 && min_good_ratio <= 1, "two-view: min_good_ratio must be in [0, 1]");
   Require(ambiguity_ratio > 0 && ambiguity_ratio <= 1, "two-view: ambiguity_ratio must be in (0, 1]");
@@ -234,10 +235,9 @@ Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, 
     parallaxes.push_back(std::acos(cos_parallax) / kDegree);
   }
   if (!parallaxes.empty()) {
-    const auto k = static_cast<size_t>(
-        std::floor(options.parallax_quantile * static_cast<double>(parallaxes.size() - 1)));
-    std::nth_element(parallaxes.begin(), parallaxes.begin() + static_cast<std::ptrdiff_t>(k),
-                     parallaxes.end());
+    const size_t k = std::min(static_cast<size_t>(options.parallax_rank), parallaxes.size()) - 1;
+    std::nth_element(parallaxes.begin(), parallaxes.begin() + static_cast<std::ptrdiff_t>(k), parallaxes.end(),
+                     std::greater<>());
     h.parallax_deg = parallaxes[k];
   }
   return h;

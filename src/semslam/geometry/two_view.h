@@ -37,11 +37,13 @@ struct TwoViewOptions {
   // least min_point_parallax_deg (the depth of a point with less is not trusted).
   double reprojection_sigmas = 2.0;
   double min_point_parallax_deg = 0.4;
-  // Acceptance: the `parallax_quantile` quantile of the good points' parallax >= min_parallax_deg; at least
+  // Acceptance: the parallax of the `parallax_rank`-th most parallax-rich good point (the least one when there
+  // are fewer) >= min_parallax_deg: a forward-moving camera sees most points near the focus of expansion with
+  // little parallax, so a median would wait far too long; enough well-triangulated points is what matters. At least
   // min_good_points good points and min_good_ratio of the model's inliers; the second best hypothesis with
   // fewer than ambiguity_ratio times the best's good points.
   double min_parallax_deg = 1.0;
-  double parallax_quantile = 0.5;
+  int parallax_rank = 50;
   int min_good_points = 50;
   double min_good_ratio = 0.9;
   double ambiguity_ratio = 0.75;
@@ -69,7 +71,7 @@ struct TwoViewResult {
   int num_inliers = 0;        // of the selected model
   int num_good = 0;           // good points of the best hypothesis
   int second_best_good = 0;   // good points of the second best hypothesis
-  double parallax_deg = 0.0;  // the parallax quantile of the best hypothesis
+  double parallax_deg = 0.0;  // the parallax_rank-th largest parallax of the best hypothesis
 };
 
 // `pixels1[i]` and `pixels2[i]` are the i-th match in images 1 and 2 (raw pixels: the camera's distortion is

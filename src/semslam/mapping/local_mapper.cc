@@ -436,7 +436,9 @@ void LocalMapper::CullKeyFrames() {
   auto lock = map_.WriteLock();
   const double close = current_->data().stereo ? options_.close_depth_baselines * current_->data().stereo->baseline
                                                : 0.0;
-  for (KeyFrame* kf : current_->Covisibles()) {
+  // A copy: erasing a keyframe changes the current keyframe's covisibility list.
+  const std::vector<KeyFrame*> covisibles = current_->Covisibles();
+  for (KeyFrame* kf : covisibles) {
     if (kf->id() == 0 || kf->is_bad()) continue;
     const FrameData& d = kf->data();
     int total = 0, redundant = 0;

@@ -64,6 +64,9 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_frames_between_keyframes", Bind(&o->tracker.min_frames_between_keyframes)},
       {"close_depth_baselines", Bind(&o->tracker.close_depth_baselines)},
       {"init_min_matches", Bind(&o->tracker.init_min_matches)},
+      {"init_min_parallax_deg", Bind(&o->tracker.init_min_parallax_deg)},
+      {"init_parallax_rank", Bind(&o->tracker.init_parallax_rank)},
+      {"init_min_points", Bind(&o->tracker.init_min_points)},
       {"pacing", BindPacing(&o->pacing)},
   };
   s["mapping"] = {

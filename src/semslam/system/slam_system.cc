@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "semslam/core/error.h"
+#include "semslam/mapping/map_optimization.h"
 #include "semslam/place/keyframe_database.h"
 #include "semslam/place/vocabulary.h"
 
@@ -120,6 +121,11 @@ void SlamSystem::Finish() {
   loop_closer_->Join();
   mapper_->RequestFinish();
   mapper_->Join();
+  if (options_.final_global_ba && !options_.localization_only) {
+    ScopedTimer timer(timing_, "final_global_ba");
+    auto lock = map_->WriteLock();
+    if (map_->NumKeyFrames() > 2) GlobalBundleAdjustment(*map_, options_.final_global_ba_iterations, nullptr);
+  }
 }
 
 Trajectory SlamSystem::FrameTrajectory() const {

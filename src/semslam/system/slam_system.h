@@ -37,6 +37,9 @@ struct SlamOptions {
   LoopCloserOptions loop;
   std::filesystem::path vocabulary;    // empty: the default vocabulary
   bool localization_only = false;      // track against a loaded map without changing it
+  // A full bundle adjustment of the whole map when the sequence ends (trajectories follow their keyframes).
+  bool final_global_ba = true;
+  int final_global_ba_iterations = 20;
 
   void Check() const;
 };

@@ -29,6 +29,8 @@ void TrackerOptions::Check() const {
   Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
   Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
+  Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
+          "tracker: init_min_parallax_deg must be >= 0, init_parallax_rank >= 1, init_min_points >= 8");
 }
 
 const char* ToString(TrackingState state) {
@@ -238,6 +240,10 @@ bool Tracker::InitializeMonocular(Frame& frame) {
     init_frame_.reset();
     return false;
   }
+  // The next frame searches around where each feature was seen last, so the windows follow the motion.
+  for (size_t i = 0; i < matches12.size(); ++i) {
+    if (matches12[i] >= 0) init_prior_positions_[i] = frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel;
+  }
 
   std::vector<Eigen::Vector2d> pixels1, pixels2;
   std::vector<int> index1;
@@ -249,6 +255,9 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   }
   TwoViewOptions two_view_options;
   two_view_options.seed = frame.id();
+  two_view_options.min_parallax_deg = options_.init_min_parallax_deg;
+  two_view_options.parallax_rank = options_.init_parallax_rank;
+  two_view_options.min_good_points = options_.init_min_points;
   const TwoViewResult two_view = InitializeTwoView(pixels1, pixels2, camera_, two_view_options);
   if (!two_view.success) {
     spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
@@ -280,7 +289,7 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   // Full bundle adjustment of the two views, then the scale: median scene depth 1.
   GlobalBundleAdjustment(map_, 20, nullptr);
   const double median_depth = kf1->SceneDepthQuantile(2);
-  if (median_depth <= 0 || kf2->CountTrackedPoints(1) < 100) {
+  if (median_depth <= 0 || kf2->CountTrackedPoints(1) < options_.init_min_points) {
     spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(), median_depth,
                   kf2->CountTrackedPoints(1));
     map_.Clear();

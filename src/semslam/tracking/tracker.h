@@ -31,6 +31,11 @@ struct TrackerOptions {
   double close_depth_baselines = 40.0;    // stereo: points closer than this many baselines are "close"
   bool localization_only = false;         // track against the map without changing it
   int init_min_matches = 100;
+  // Monocular initialization accepts a two-view reconstruction when the init_parallax_rank-th most
+  // parallax-rich point has at least init_min_parallax_deg (see geometry/two_view.h).
+  double init_min_parallax_deg = 2.0;
+  int init_parallax_rank = 50;
+  int init_min_points = 100;  // well-triangulated points needed
 
   void Check() const;
 };

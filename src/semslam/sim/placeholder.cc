@@ -1,1 +1,0 @@
-// Replaced as the sim module is implemented.

@@ -1,0 +1,48 @@
+#pragma once
+// The drive through the town: a sequence of intersections made of rectangular loops around blocks, turned
+// alternately left and right; after each loop the car drives the loop's first street again in the same
+// direction (a revisit for loop closure) before it leaves for the next one. The path keeps to the right lane,
+// turns on circular arcs smoothed to continuous curvature, and is driven at 8-12 m/s with limited
+// acceleration, slower in the turns. Poses are sampled at the camera rate.
+
+#include <cstdint>
+#include <vector>
+
+#include "semslam/geometry/rigid3.h"
+#include "semslam/sim/city.h"
+
+namespace semslam::sim {
+
+struct RouteOptions {
+  int frames = 1200;
+  double rate_hz = 10.0;
+  double min_speed = 8.0;       // m/s
+  double max_speed = 12.0;      // m/s
+  double camera_height = 1.65;  // above the road
+  bool reverse = false;         // drive the same streets in the opposite direction
+  std::uint64_t seed = 0;       // 0: the city seed
+  void Check() const;
+};
+
+struct RouteTurn {
+  int frame = 0;  // the frame nearest to the middle of the turn
+  bool left = false;
+  int intersection = 0;  // StreetGrid intersection id
+};
+
+struct Route {
+  std::vector<int> intersections;         // planned, in driving order (the frames may end before the last)
+  std::vector<Rigid3d> town_from_camera;  // left camera, per frame
+  std::vector<double> speed;              // m/s, per frame
+  std::vector<double> yaw;                // heading, rad, counter-clockwise from east (town x)
+  std::vector<double> yaw_rate;           // rad/s
+  std::vector<double> acceleration;       // along the path, m/s^2
+  std::vector<RouteTurn> turns;           // turns reached within the frames
+  std::vector<int> frame_segment;         // street segment id the car is on (nearest), per frame
+  double length = 0;                      // driven over the frames, metres
+};
+
+// Throws InvalidArgument if the town is too small for a loop.
+Route PlanRoute(const City& city, const RouteOptions& options);
+
+}  // namespace semslam::sim
