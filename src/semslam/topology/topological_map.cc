@@ -285,26 +285,27 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
     }
     map.landmarks.push_back(std::move(l));
   }
-  std::vector<double> turn_sum(map.nodes.size(), 0.0);
-  std::vector<int> left_count, right_count;
+  // Per node: the sums of its left, right and u-turn angles.
+  std::vector<Eigen::Vector3d> angle_sums;
   for (const TurnEvent& t : turns) {
     int node = nearest_node(points[static_cast<size_t>(t.keyframe)]);
     if (node < 0) node = new_node(t.keyframe).id;
     TopoNode& n = map.nodes[static_cast<size_t>(node)];
     n.is_turn = true;
     ++n.turn_events;
-    turn_sum.resize(map.nodes.size(), 0.0);
-    left_count.resize(map.nodes.size(), 0);
-    right_count.resize(map.nodes.size(), 0);
-    turn_sum[static_cast<size_t>(node)] += t.angle;
-    (t.angle > 0 ? left_count : right_count)[static_cast<size_t>(node)]++;
+    angle_sums.resize(map.nodes.size(), Eigen::Vector3d::Zero());
+    const TurnDirection direction = ClassifyTurn(t.angle, 0.0);
+    const int kind = direction == TurnDirection::kUTurn ? 2 : direction == TurnDirection::kLeft ? 0 : 1;
+    (kind == 0 ? n.left_turns : kind == 1 ? n.right_turns : n.u_turns)++;
+    angle_sums[static_cast<size_t>(node)][kind] += t.angle;
   }
   for (TopoNode& n : map.nodes) {
     const size_t i = static_cast<size_t>(n.id);
     if (n.is_turn) {
-      n.turn_angle_deg = turn_sum[i] / n.turn_events;
-      n.turn = left_count[i] >= right_count[i] ? TurnDirection::kLeft : TurnDirection::kRight;
-      if (std::abs(n.turn_angle_deg) > 150.0) n.turn = TurnDirection::kUTurn;
+      const int most = std::max({n.left_turns, n.right_turns, n.u_turns});
+      const int kind = n.left_turns == most ? 0 : n.right_turns == most ? 1 : 2;
+      n.turn = kind == 0 ? TurnDirection::kLeft : kind == 1 ? TurnDirection::kRight : TurnDirection::kUTurn;
+      n.turn_angle_deg = angle_sums[i][kind] / most;
     }
     n.map_position = georeference.EnuToMap(n.enu);
     n.wgs84 = georeference.enu_frame.ToWgs84(n.enu);

@@ -51,11 +51,14 @@ struct TopoNode {
   Wgs84 wgs84;
   std::vector<int> landmarks;                     // indices into TopologicalMap::landmarks
   TurnDirection turn = TurnDirection::kStraight;  // of the turn events here (majority), when is_turn
-  double turn_angle_deg = 0.0;                    // mean signed heading change of the turn events (+ left)
-  int turn_events = 0;                            // turn events fused here
-  int anchor_keyframe = -1;                       // index into TopologicalMap::keyframes
-  std::vector<int> visit_keyframes;               // nearest keyframe of each pass, in trajectory order
-  std::vector<double> visit_arc_m;  // arc length along the trajectory of each pass's closest point
+  double turn_angle_deg = 0.0;  // mean signed heading change of the events of `turn` (+ left)
+  int turn_events = 0;          // turn events fused here
+  // Of them: left, right, and turning around (|heading change| > 150 deg); a crossroads may be turned
+  // different ways on different passes. `turn` is the most frequent (ties: left, right, u-turn).
+  int left_turns = 0, right_turns = 0, u_turns = 0;
+  int anchor_keyframe = -1;          // index into TopologicalMap::keyframes
+  std::vector<int> visit_keyframes;  // nearest keyframe of each pass, in trajectory order
+  std::vector<double> visit_arc_m;   // arc length along the trajectory of each pass's closest point
 
   int passes() const { return static_cast<int>(visit_arc_m.size()); }
 };

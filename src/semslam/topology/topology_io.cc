@@ -171,6 +171,9 @@ std::string TopologyJsonString(const TopologicalMap& map) {
                      {"turn", TurnDirectionName(n.turn)},
                      {"turn_angle_deg", n.turn_angle_deg},
                      {"turn_events", n.turn_events},
+                     {"left_turns", n.left_turns},
+                     {"right_turns", n.right_turns},
+                     {"u_turns", n.u_turns},
                      {"anchor_keyframe", n.anchor_keyframe},
                      {"visit_keyframes", n.visit_keyframes},
                      {"visit_arc_m", n.visit_arc_m}});
@@ -311,6 +314,13 @@ TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) 
     n.turn = TurnFromName(r.String(j, "turn", p), r, p + ".turn");
     n.turn_angle_deg = r.Number(j, "turn_angle_deg", p);
     n.turn_events = static_cast<int>(r.Integer(j, "turn_events", p));
+    n.left_turns = static_cast<int>(r.Integer(j, "left_turns", p));
+    n.right_turns = static_cast<int>(r.Integer(j, "right_turns", p));
+    n.u_turns = static_cast<int>(r.Integer(j, "u_turns", p));
+    if (n.left_turns < 0 || n.right_turns < 0 || n.u_turns < 0 ||
+        n.left_turns + n.right_turns + n.u_turns != n.turn_events) {
+      r.Fail(p + ".turn_events", "must be left_turns + right_turns + u_turns");
+    }
     n.anchor_keyframe =
         check_index(r.Integer(j, "anchor_keyframe", p), keyframes.size(), p + ".anchor_keyframe", true);
     const json& vk = r.Array(j, "visit_keyframes", p);
