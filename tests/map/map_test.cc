@@ -118,12 +118,15 @@ TEST(MapPoint, ReplaceWithMovesObservationsAndMultipliesLabels) {
   SmallMap m;
   MapPoint* a = m.points[0];
   MapPoint* b = m.points[25];  // seen by kf0 and kf1 only
-  a->label_log_probabilities().assign(19, 0.0f);
-  a->label_log_probabilities()[2] = -0.5f;
-  b->label_log_probabilities().assign(19, 0.0f);
-  b->label_log_probabilities()[2] = -0.25f;
-  a->label_observations = 2;
-  b->label_observations = 1;
+  ClassLogProbs building{}, building2{};
+  building.fill(-2.0f);
+  building[2] = -0.5f;
+  building2.fill(-2.0f);
+  building2[2] = -0.25f;
+  a->labels().Fuse(building);
+  a->labels().Fuse(building);
+  b->labels().Fuse(building2);
+  const float a_building = a->labels().Probabilities()[2];
   a->ReplaceWith(b);
   EXPECT_TRUE(a->is_bad());
   EXPECT_EQ(a->Resolve(), b);
@@ -131,8 +134,34 @@ TEST(MapPoint, ReplaceWithMovesObservationsAndMultipliesLabels) {
   EXPECT_EQ(m.kf2->map_point(0), b);
   EXPECT_EQ(b->IndexIn(m.kf2), 0);
   EXPECT_EQ(m.kf0->map_point(0), nullptr);
-  EXPECT_FLOAT_EQ(b->label_log_probabilities()[2], -0.75f);
-  EXPECT_EQ(b->label_observations, 3);
+  // Posteriors multiply: three observations favouring building, stronger than a's two.
+  EXPECT_EQ(b->labels().NumObservations(), 3);
+  EXPECT_EQ(b->labels().Label(), 2);
+  EXPECT_GT(b->labels().Probabilities()[2], a_building);
+}
+
+TEST(MapPoint, ObservationOfASegmentedKeyframeFusesItsLabel) {
+  SmallMap m;
+  std::vector<float> rows(m.kf2->num_features() * kNumClasses, 0.0f);  // all "no observation"...
+  for (int c = 0; c < kNumClasses; ++c)
+    rows[25 * kNumClasses + static_cast<size_t>(c)] = c == 13 ? -0.05f : -5.0f;
+  m.kf2->keypoint_labels.Assign(rows);  // ...but keypoint 25: car
+  ClassLogProbs probe;
+  ASSERT_TRUE(m.kf2->keypoint_labels.Get(25, &probe));
+  EXPECT_NEAR(probe[13], -0.0625f, 1e-6);  // quantized to 1/16 nat
+  EXPECT_NEAR(probe[0], -5.0f, 1e-6);
+  EXPECT_FALSE(m.kf2->keypoint_labels.Get(24, &probe));
+
+  MapPoint* p = m.points[25];  // seen by kf0 and kf1 only
+  EXPECT_FALSE(p->labels().HasObservations());
+  p->AddObservation(m.kf2, 25);
+  EXPECT_EQ(p->labels().NumObservations(), 1);
+  EXPECT_EQ(p->labels().Label(), 13);
+  EXPECT_TRUE(p->IsDynamic());
+  MapPoint* q = m.points[24];
+  q->AddObservation(m.kf2, 24);  // no observation at that keypoint
+  EXPECT_FALSE(q->labels().HasObservations());
+  EXPECT_FALSE(q->IsDynamic());
 }
 
 TEST(KeyFrame, CovisibilityAndSpanningTree) {
@@ -184,9 +213,14 @@ TEST(Map, ClearMarksEverythingBad) {
 TEST(MapFile, RoundTripIsExact) {
   testing::TempDir dir;
   SmallMap m(/*stereo=*/true);
-  m.points[3]->label_log_probabilities().assign(19, -1.0f);
-  m.points[3]->label_log_probabilities()[8] = -0.01f;
-  m.points[3]->label_observations = 4;
+  ClassLogProbs vegetation;
+  vegetation.fill(-3.0f);
+  vegetation[8] = -0.01f;
+  for (int k = 0; k < 4; ++k) m.points[3]->labels().Fuse(vegetation);
+  std::vector<float> rows(m.kf2->num_features() * kNumClasses, 0.0f);
+  for (int c = 0; c < kNumClasses; ++c)
+    rows[5 * kNumClasses + static_cast<size_t>(c)] = c == 13 ? -0.1f : -4.0f;
+  m.kf2->keypoint_labels.Assign(rows);
   m.kf1->gps_enu = Eigen::Vector3d(1.5, -2.5, 0.25);
   m.kf1->gps_sigma_m = 1.0;
   m.kf1->AddLoopEdge(m.kf2);
@@ -232,6 +266,9 @@ TEST(MapFile, RoundTripIsExact) {
     ASSERT_TRUE(b->data().stereo.has_value());
     EXPECT_EQ(b->data().stereo->baseline, 0.54);
   }
+  EXPECT_EQ(kfs[2]->keypoint_labels.quantized(), m.kf2->keypoint_labels.quantized());
+  EXPECT_EQ(kfs[2]->keypoint_labels.labeled(), m.kf2->keypoint_labels.labeled());
+  EXPECT_EQ(loaded.MapPoints()[3]->labels().Label(), 8);
   ASSERT_TRUE(kfs[1]->gps_enu.has_value());
   EXPECT_EQ(*kfs[1]->gps_enu, *m.kf1->gps_enu);
   const auto points = loaded.MapPoints();
@@ -242,8 +279,7 @@ TEST(MapFile, RoundTripIsExact) {
     EXPECT_EQ(a->position(), b->position());
     EXPECT_EQ(a->num_observations(), b->num_observations());
     EXPECT_EQ(a->descriptor(), b->descriptor());
-    EXPECT_EQ(a->label_log_probabilities(), b->label_log_probabilities());
-    EXPECT_EQ(a->label_observations, b->label_observations);
+    EXPECT_TRUE(a->labels() == b->labels());
     for (const auto& [kf, index] : b->observations()) EXPECT_EQ(kf->map_point(index), b);
   }
   EXPECT_EQ(kfs[0]->ConnectionWeight(kfs[1]), 30);

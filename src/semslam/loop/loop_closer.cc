@@ -1,10 +1,11 @@
 #include "semslam/loop/loop_closer.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <unordered_map>
-
-#include <spdlog/spdlog.h>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/sim3_solver.h"
@@ -32,11 +33,18 @@ void LoopCloserOptions::Check() const {
   Require(min_bow_matches >= 3 && min_sim3_inliers >= 3 && min_projected_matches >= 3,
           "loop closer: match thresholds must be >= 3");
   Require(global_ba_iterations > 0, "loop closer: global_ba_iterations must be positive");
+  Require(max_correction_ratio > 0 && max_correction_deg > 0,
+          "loop closer: max_correction_ratio and max_correction_deg must be positive");
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
                        KeyFrameDatabase& database, LocalMapper& mapper, TimingRegistry& timing)
-    : options_(options), map_(map), vocabulary_(vocabulary), database_(database), mapper_(mapper), timing_(timing) {
+    : options_(options),
+      map_(map),
+      vocabulary_(vocabulary),
+      database_(database),
+      mapper_(mapper),
+      timing_(timing) {
   options_.Check();
 }
 
@@ -141,7 +149,8 @@ bool LoopCloser::DetectLoop(KeyFrame* current) {
     current->SetErase();
     return false;
   };
-  if (current->id() < last_loop_keyframe_id_ + static_cast<std::uint64_t>(options_.min_keyframes_between_loops)) {
+  if (current->id() <
+      last_loop_keyframe_id_ + static_cast<std::uint64_t>(options_.min_keyframes_between_loops)) {
     return release();
   }
   // The lowest similarity to the covisible keyframes sets the bar for loop candidates.
@@ -209,8 +218,9 @@ bool LoopCloser::DetectLoop(KeyFrame* current) {
     bool consistent_for_some = false;
     bool enough = false;
     for (size_t g = 0; g < consistent_groups_.size(); ++g) {
-      const bool overlaps = std::any_of(group.keyframes.begin(), group.keyframes.end(),
-                                        [&](KeyFrame* kf) { return consistent_groups_[g].keyframes.count(kf) > 0; });
+      const bool overlaps = std::any_of(group.keyframes.begin(), group.keyframes.end(), [&](KeyFrame* kf) {
+        return consistent_groups_[g].keyframes.count(kf) > 0;
+      });
       if (!overlaps) continue;
       consistent_for_some = true;
       const int consistency = consistent_groups_[g].consistency + 1;
@@ -273,15 +283,20 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     // Guided matching with the estimate, then refinement by reprojection in both keyframes.
     std::vector<MapPoint*> guided(current->num_features(), nullptr);
     for (size_t k = 0; k < slots.size(); ++k) {
-      if (solution->inliers[k]) guided[static_cast<size_t>(slots[k])] = matches[static_cast<size_t>(slots[k])];
+      if (solution->inliers[k])
+        guided[static_cast<size_t>(slots[k])] = matches[static_cast<size_t>(slots[k])];
     }
     SearchBySim3(*current, *candidate, guided, solution->camera1_from_camera2, 7.5f);
     Sim3d current_from_candidate = solution->camera1_from_camera2;
-    const int inliers = RefineSim3(*current, *candidate, guided, &current_from_candidate, 10.0, options_.fix_scale);
+    const int inliers =
+        RefineSim3(*current, *candidate, guided, &current_from_candidate, 10.0, options_.fix_scale);
     if (inliers < options_.min_sim3_inliers) continue;
 
+    const Sim3d corrected_current_from_world =
+        current_from_candidate * ToSim3(candidate->camera_from_world());
+    if (!CorrectionIsPlausible(current, candidate, corrected_current_from_world)) continue;
     matched_keyframe_ = candidate;
-    current_from_world_ = current_from_candidate * ToSim3(candidate->camera_from_world());
+    current_from_world_ = corrected_current_from_world;
     // Points around the matched place, projected into the current keyframe for more matches.
     loop_points_.clear();
     std::set<MapPoint*> unique;
@@ -294,8 +309,9 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     }
     current_matched_points_ = guided;
     SearchBySim3Projection(*current, current_from_world_, loop_points_, current_matched_points_, 10);
-    last_matches_ = static_cast<int>(std::count_if(current_matched_points_.begin(), current_matched_points_.end(),
-                                                   [](MapPoint* p) { return p != nullptr; }));
+    last_matches_ =
+        static_cast<int>(std::count_if(current_matched_points_.begin(), current_matched_points_.end(),
+                                       [](MapPoint* p) { return p != nullptr; }));
     if (last_matches_ >= options_.min_projected_matches) {
       lock.unlock();
       auto write = map_.WriteLock();
@@ -308,13 +324,41 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
   return false;
 }
 
+bool LoopCloser::CorrectionIsPlausible(const KeyFrame* current, const KeyFrame* candidate,
+                                       const Sim3d& corrected_current_from_world) const {
+  // Distance driven between the two ends, along the keyframes in between (map units).
+  double travelled = 0.0;
+  const KeyFrame* previous = nullptr;
+  for (std::uint64_t id = candidate->id(); id <= current->id(); ++id) {
+    const KeyFrame* kf = map_.KeyFrameById(id);
+    if (kf == nullptr || kf->is_bad()) continue;
+    if (previous != nullptr) travelled += (kf->center() - previous->center()).norm();
+    previous = kf;
+  }
+  const Rigid3d corrected = ToRigid(corrected_current_from_world);
+  const double shift = (corrected.Inverse().translation - current->center()).norm();
+  const double turn_deg = (corrected.rotation * current->world_from_camera().rotation)
+                              .angularDistance(Eigen::Quaterniond::Identity()) *
+                          180.0 / M_PI;
+  const double max_shift = options_.max_correction_ratio * travelled;
+  const double max_turn_deg = options_.max_correction_deg;
+  if (shift <= max_shift && turn_deg <= max_turn_deg) return true;
+  spdlog::info(
+      "loop candidate: keyframe {} with keyframe {} rejected: it would move the keyframe {:.1f} (limit "
+      "{:.1f}) and "
+      "turn it {:.1f} deg (limit {:.1f}) after {:.1f} travelled",
+      current->id(), candidate->id(), shift, max_shift, turn_deg, max_turn_deg, travelled);
+  return false;
+}
+
 void LoopCloser::CorrectLoop(KeyFrame* current) {
   ScopedTimer timer(timing_, "loop_correction");
-  spdlog::info("loop detected: keyframe {} matches keyframe {} ({} matches)", current->id(), matched_keyframe_->id(),
-               last_matches_);
+  spdlog::info("loop detected: keyframe {} matches keyframe {} ({} matches)", current->id(),
+               matched_keyframe_->id(), last_matches_);
   mapper_.RequestStop();
   StopGlobalBundleAdjustment();
-  while (!mapper_.IsStopped() && !mapper_.IsFinished()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  while (!mapper_.IsStopped() && !mapper_.IsFinished())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
 
   LoopEvent event;
   event.query_keyframe = current->id();
@@ -481,9 +525,8 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     if (it == change.end()) continue;
     // For corrected points, `before` of the reference is the corrected pose they were moved with.
     const auto c = corrected.find(map_.KeyFrameById(ref));
-    const Sim3d& reference_cw = (p->corrected_by_keyframe == current->id() && c != corrected.end())
-                                    ? c->second
-                                    : it->second.first;
+    const Sim3d& reference_cw =
+        (p->corrected_by_keyframe == current->id() && c != corrected.end()) ? c->second : it->second.first;
     p->SetPosition(it->second.second * (reference_cw * p->position()));
     p->UpdateNormalAndDepth();
   }
@@ -520,7 +563,8 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
   }
   // Apply under a stopped mapper: keyframes created during the BA follow their parents' corrections.
   mapper_.RequestStop();
-  while (!mapper_.IsStopped() && !mapper_.IsFinished()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  while (!mapper_.IsStopped() && !mapper_.IsFinished())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   {
     auto lock = map_.WriteLock();
     std::unordered_map<const KeyFrame*, size_t> in_ba;
@@ -564,7 +608,8 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
         p->SetPosition(problem.points[it->second]);
       } else if (p->reference_keyframe() != nullptr) {
         const auto c = correction.find(p->reference_keyframe());
-        if (c != correction.end()) p->SetPosition(c->second.second.Inverse() * (c->second.first * p->position()));
+        if (c != correction.end())
+          p->SetPosition(c->second.second.Inverse() * (c->second.first * p->position()));
       }
       p->UpdateNormalAndDepth();
     }

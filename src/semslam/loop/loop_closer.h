@@ -25,12 +25,18 @@ class KeyFrameDatabase;
 class LocalMapper;
 
 struct LoopCloserOptions {
-  bool fix_scale = false;              // stereo: SE(3) loops
-  int consistency_threshold = 3;       // consecutive consistent detections before a loop is tried
+  bool fix_scale = false;         // stereo: SE(3) loops
+  int consistency_threshold = 3;  // consecutive consistent detections before a loop is tried
   int min_keyframes_between_loops = 10;
   int min_bow_matches = 20;
   int min_sim3_inliers = 20;
   int min_projected_matches = 40;
+  // A loop may correct the current keyframe by at most this fraction of the distance driven since the matched
+  // keyframe, and turn it by at most max_correction_deg: drift grows with distance, while a place that only
+  // looks the same (repeated facades) would ask for a jump. SlamSystem sets the ratio by sensor (stereo maps
+  // drift far less than monocular ones).
+  double max_correction_ratio = 0.3;
+  double max_correction_deg = 20.0;
   bool global_ba = true;
   int global_ba_iterations = 10;
   bool enabled = true;
@@ -43,14 +49,14 @@ struct LoopEvent {
   std::uint64_t matched_keyframe = 0;
   double query_timestamp = 0.0;
   int matches = 0;
-  double scale = 1.0;           // of the correction (monocular drift)
-  double correction_m = 0.0;    // how far the query keyframe moved
+  double scale = 1.0;         // of the correction (monocular drift)
+  double correction_m = 0.0;  // how far the query keyframe moved
 };
 
 class LoopCloser {
  public:
-  LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary, KeyFrameDatabase& database,
-             LocalMapper& mapper, TimingRegistry& timing);
+  LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
+             KeyFrameDatabase& database, LocalMapper& mapper, TimingRegistry& timing);
   ~LoopCloser();
 
   void Start();
@@ -69,6 +75,8 @@ class LoopCloser {
   void Run();
   bool DetectLoop(KeyFrame* current);
   bool ComputeSim3(KeyFrame* current);
+  bool CorrectionIsPlausible(const KeyFrame* current, const KeyFrame* candidate,
+                             const Sim3d& corrected_current_from_world) const;
   void CorrectLoop(KeyFrame* current);
   void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
                               const std::map<KeyFrame*, Sim3d>& non_corrected,
@@ -102,7 +110,7 @@ class LoopCloser {
 
   // The loop found by ComputeSim3.
   KeyFrame* matched_keyframe_ = nullptr;
-  Sim3d current_from_world_;            // corrected pose of the current keyframe (Scw)
+  Sim3d current_from_world_;  // corrected pose of the current keyframe (Scw)
   std::vector<MapPoint*> current_matched_points_;
   std::vector<MapPoint*> loop_points_;
   int last_matches_ = 0;

@@ -16,6 +16,7 @@
 #include "semslam/geometry/rigid3.h"
 #include "semslam/map/by_id.h"
 #include "semslam/map/frame.h"
+#include "semslam/map/keypoint_labels.h"
 
 namespace semslam {
 
@@ -90,9 +91,9 @@ class KeyFrame {
   BowVector bow;
   FeatureVector feature_vector;
 
-  // Semantics: per-keypoint class log-probabilities sampled from this keyframe's segmentation (19 per
-  // keypoint, row-major), empty until the keyframe has been segmented.
-  std::vector<float> keypoint_label_log_probabilities;
+  // Semantics: the class observations of this keyframe's segmentation at its keypoints; empty until the
+  // keyframe has been segmented.
+  KeypointLabels keypoint_labels;
 
   // GPS: the fix matched to this keyframe, in the ENU frame (metres), when there is one.
   std::optional<Eigen::Vector3d> gps_enu;

@@ -125,7 +125,8 @@ void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
   w.Put(gps.y());
   w.Put(gps.z());
   w.Put(kf.gps_sigma_m);
-  w.PutVector(kf.keypoint_label_log_probabilities);
+  w.PutVector(kf.keypoint_labels.quantized());
+  w.PutVector(kf.keypoint_labels.labeled());
 }
 
 std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
@@ -166,7 +167,11 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   gps.y() = r.Get<double>();
   gps.z() = r.Get<double>();
   const double gps_sigma = r.Get<double>();
-  auto labels = r.GetVector<float>();
+  auto quantized_labels = r.GetVector<std::uint8_t>();
+  auto labeled = r.GetVector<std::uint8_t>();
+  if (!labeled.empty() && (labeled.size() != n || quantized_labels.size() != n * kNumClasses)) {
+    r.Fail("keypoint labels of the wrong size");
+  }
 
   Frame frame(frame_id, timestamp,
               MakeFrameData(camera, stereo, std::move(features), std::move(right_u), std::move(depth)));
@@ -174,7 +179,7 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   auto kf = std::make_unique<KeyFrame>(id, frame);
   if (has_gps) kf->gps_enu = gps;
   kf->gps_sigma_m = gps_sigma;
-  kf->keypoint_label_log_probabilities = std::move(labels);
+  kf->keypoint_labels.Restore(std::move(quantized_labels), std::move(labeled));
   return kf;
 }
 
@@ -186,8 +191,7 @@ void MapSerializer::WritePoint(BinaryWriter& w, const MapPoint& p) {
   w.Put(p.position().z());
   w.Put<std::int32_t>(p.visible());
   w.Put<std::int32_t>(p.found());
-  w.PutVector(p.label_log_probabilities());
-  w.Put<std::int32_t>(p.label_observations);
+  p.labels().AppendTo(w);
   std::vector<std::uint64_t> observations;
   for (const auto& [kf, index] : p.observations()) {
     observations.push_back(kf->id());
@@ -208,8 +212,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
   if (!position.allFinite()) r.Fail("position is not finite");
   const int visible = r.Get<std::int32_t>();
   const int found = r.Get<std::int32_t>();
-  auto labels = r.GetVector<float>();
-  const int label_observations = r.Get<std::int32_t>();
+  const LabelDistribution labels = LabelDistribution::ReadFrom(r);
   const auto observations = r.GetVector<std::uint64_t>();
   if (observations.size() % 2 != 0) r.Fail("odd observation list");
 
@@ -218,8 +221,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
   auto point = std::make_unique<MapPoint>(id, position, ref->second);
   point->visible_ = visible;
   point->found_ = found;
-  point->label_log_probabilities_ = std::move(labels);
-  point->label_observations = label_observations;
+  point->labels_ = labels;
   MapPoint* p = map.RestoreMapPoint(std::move(point));
   for (size_t i = 0; i < observations.size(); i += 2) {
     const auto kf = keyframes.find(observations[i]);
@@ -227,7 +229,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
     const auto index = observations[i + 1];
     if (index >= kf->second->num_features()) r.Fail("observation index out of range");
     kf->second->SetMapPoint(static_cast<int>(index), p);
-    p->AddObservation(kf->second, static_cast<int>(index));
+    p->AddObservation(kf->second, static_cast<int>(index), /*fuse_labels=*/false);
   }
   if (p->observations().empty()) r.Fail("point without observations");
   p->first_keyframe_id_ = p->observations().begin()->first->id();

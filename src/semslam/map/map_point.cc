@@ -13,10 +13,14 @@ MapPoint::MapPoint(std::uint64_t id, const Eigen::Vector3d& position, KeyFrame* 
       position_(position),
       reference_keyframe_(reference_keyframe) {}
 
-void MapPoint::AddObservation(KeyFrame* keyframe, int keypoint_index) {
+void MapPoint::AddObservation(KeyFrame* keyframe, int keypoint_index, bool fuse_labels) {
   if (observations_.count(keyframe)) return;
   observations_[keyframe] = keypoint_index;
   num_observations_ += keyframe->data().HasDepth(keypoint_index) ? 2 : 1;
+  ClassLogProbs observation;
+  if (fuse_labels && keyframe->keypoint_labels.Get(static_cast<size_t>(keypoint_index), &observation)) {
+    labels_.Fuse(observation);
+  }
 }
 
 void MapPoint::EraseObservation(KeyFrame* keyframe) {
@@ -62,17 +66,8 @@ void MapPoint::ReplaceWith(MapPoint* other) {
   }
   other->IncreaseFound(found());
   other->IncreaseVisible(visible());
-  // Two independent label posteriors over a uniform prior multiply: add the log-probabilities.
-  if (!label_log_probabilities_.empty()) {
-    if (other->label_log_probabilities_.empty()) {
-      other->label_log_probabilities_ = label_log_probabilities_;
-    } else {
-      for (size_t c = 0; c < label_log_probabilities_.size(); ++c) {
-        other->label_log_probabilities_[c] += label_log_probabilities_[c];
-      }
-    }
-    other->label_observations += label_observations;
-  }
+  // Two independent label posteriors over a uniform prior multiply.
+  other->labels_.Merge(labels_);
   other->UpdateDescriptor();
 }
 

@@ -13,6 +13,7 @@
 #include "semslam/features/orb_types.h"
 #include "semslam/geometry/eigen_types.h"
 #include "semslam/map/by_id.h"
+#include "semslam/semantics/label_fusion.h"
 
 namespace semslam {
 
@@ -36,7 +37,9 @@ class MapPoint {
   const std::map<KeyFrame*, int, ById>& observations() const { return observations_; }
   // Number of observing cameras (a stereo observation counts twice, as in the literature).
   int num_observations() const { return num_observations_; }
-  void AddObservation(KeyFrame* keyframe, int keypoint_index);
+  // When the keyframe is already segmented, its class observation at the keypoint is fused into the point's
+  // labels (unless `fuse_labels` is false: restoring a stored map whose labels already hold it).
+  void AddObservation(KeyFrame* keyframe, int keypoint_index, bool fuse_labels = true);
   // Removes the observation; the point turns bad when fewer than 3 camera observations remain.
   void EraseObservation(KeyFrame* keyframe);
   int IndexIn(const KeyFrame* keyframe) const;
@@ -67,10 +70,11 @@ class MapPoint {
   int visible() const { return visible_.load(std::memory_order_relaxed); }
   int found() const { return found_.load(std::memory_order_relaxed); }
 
-  // Semantics: log-probabilities over the 19 classes (uniform = all zero), see semantics/label_fusion.h.
-  std::vector<float>& label_log_probabilities() { return label_log_probabilities_; }
-  const std::vector<float>& label_log_probabilities() const { return label_log_probabilities_; }
-  int label_observations = 0;
+  // Semantics: the fused class distribution (semantics/label_fusion.h).
+  LabelDistribution& labels() { return labels_; }
+  const LabelDistribution& labels() const { return labels_; }
+  // Whether the point most probably lies on something that moves (person, rider, vehicle).
+  bool IsDynamic() const { return labels_.HasObservations() && labels_.DynamicProbability() > 0.5f; }
 
   // Scratch (tracking thread): frame id for which the point is already in the local map / was matched.
   std::uint64_t tracking_local_map_frame = UINT64_MAX;
@@ -106,7 +110,7 @@ class MapPoint {
   std::atomic<int> found_{1};
   bool bad_ = false;
   MapPoint* replaced_by_ = nullptr;
-  std::vector<float> label_log_probabilities_;
+  LabelDistribution labels_;
 };
 
 }  // namespace semslam

@@ -24,6 +24,7 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera, 
   options_.tracker.monocular = options_.mode == SensorMode::kMonocular;
   options_.mapper.monocular = options_.tracker.monocular;
   options_.loop.fix_scale = !options_.tracker.monocular;
+  if (!options_.tracker.monocular) options_.loop.max_correction_ratio = std::min(options_.loop.max_correction_ratio, 0.1);
   options_.tracker.localization_only = options_.localization_only;
   options_.Check();
   Require(options_.mode == SensorMode::kMonocular || stereo_.has_value(),
