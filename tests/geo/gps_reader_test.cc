@@ -1,12 +1,10 @@
-#include "semslam/geo/gps.h"
-
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include <fmt/format.h>
-
+#include "semslam/geo/gps.h"
 #include "support/test_support.h"
 #include "test_files.h"
 
@@ -25,7 +23,9 @@ std::string Nmea(const std::string& body) {
 
 TEST(GpsCsv, ReadsWithAndWithoutHeader) {
   TempDir dir;
-  const auto plain = WriteText(dir / "plain.csv", "0.0,49.0,8.4\n0.1,49.00001,8.40001,115.5,0.7\n\n# comment\n0.2,49.00002,8.40002,,\n");
+  const auto plain =
+      WriteText(dir / "plain.csv",
+                "0.0,49.0,8.4\n0.1,49.00001,8.40001,115.5,0.7\n\n# comment\n0.2,49.00002,8.40002,,\n");
   const GpsLog log = ReadGpsCsv(plain);
   ASSERT_EQ(log.fixes.size(), 3u);
   EXPECT_TRUE(log.skipped.empty());
@@ -35,7 +35,8 @@ TEST(GpsCsv, ReadsWithAndWithoutHeader) {
   EXPECT_DOUBLE_EQ(log.fixes[2].sigma_m, GpsReadOptions{}.default_sigma_m);
   EXPECT_EQ(log.fixes[2].source.line, 5);
 
-  const auto header = WriteText(dir / "header.csv", "lon, latitude ,\"time\",sigma\n8.4,49.0,10.0,2.0\n8.5,49.1,11.0,3.0\n");
+  const auto header =
+      WriteText(dir / "header.csv", "lon, latitude ,\"time\",sigma\n8.4,49.0,10.0,2.0\n8.5,49.1,11.0,3.0\n");
   const GpsLog h = ReadGpsCsv(header);
   ASSERT_EQ(h.fixes.size(), 2u);
   EXPECT_DOUBLE_EQ(h.fixes[1].timestamp, 11.0);
@@ -44,17 +45,17 @@ TEST(GpsCsv, ReadsWithAndWithoutHeader) {
   EXPECT_DOUBLE_EQ(h.fixes[1].sigma_m, 3.0);
 }
 
-TEST(GpsCsv, DISABLED_BadFixesAreSkippedAndReported) {
+TEST(GpsCsv, BadFixesAreSkippedAndReported) {
   TempDir dir;
   const auto file = WriteText(dir / "bad.csv",
                               "t,lat,lon,alt,sigma\n"
                               "0,49,8,100,1\n"
-                              "1,nan,8,100,1\n"           // NaN
-                              "2,91,8,100,1\n"            // latitude out of range
-                              "3,49,181,100,1\n"          // longitude out of range
-                              "1.5,49,8,100,1\n"          // goes back in time
-                              "4,49,8,100,-1\n"           // negative sigma
-                              "5,49,8,1e6,1\n"            // altitude out of range
+                              "1,nan,8,100,1\n"   // NaN
+                              "2,91,8,100,1\n"    // latitude out of range
+                              "3,49,181,100,1\n"  // longitude out of range
+                              "1.5,49,8,100,1\n"  // goes back in time
+                              "4,49,8,100,-1\n"   // negative sigma
+                              "5,49,8,1e6,1\n"    // altitude out of range
                               "6,49,8,100,1\n");
   const GpsLog log = ReadGpsCsv(file);
   ASSERT_EQ(log.fixes.size(), 2u);
@@ -92,7 +93,8 @@ TEST(GpsCsv, MalformedFilesThrowWithLineAndField) {
 TEST(GpsNmea, ParsesTheTextbookGga) {
   TempDir dir;
   // The classic example sentence, checksum 47 as published.
-  const auto file = WriteText(dir / "a.nmea", "$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47\n");
+  const auto file =
+      WriteText(dir / "a.nmea", "$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47\n");
   const GpsLog log = ReadGpsNmea(file);
   EXPECT_EQ(log.format, "nmea");
   ASSERT_EQ(log.fixes.size(), 1u);
@@ -107,16 +109,17 @@ TEST(GpsNmea, SkipsBadSentencesAndUsesTheRmcDate) {
   TempDir dir;
   std::string text;
   text += Nmea("GPRMC,235959.50,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W") + "\n";  // 1994-03-23
-  text += Nmea("GPGGA,235959.50,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";    // 2: ok
-  text += Nmea("GNGGA,000000.50,4807.040,S,01131.000,W,2,08,1.2,545.4,M,,M,,") + "\n";         // 3: ok, next day
-  text += "$GPGGA,000001.50,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*00\n";          // 4: bad checksum
-  text += Nmea("GPGGA,000002.50,4807.040,N,01131.000,E,0,00,99.9,545.4,M,46.9,M,,") + "\n";    // 5: no fix
+  text += Nmea("GPGGA,235959.50,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";     // 2: ok
+  text += Nmea("GNGGA,000000.50,4807.040,S,01131.000,W,2,08,1.2,545.4,M,,M,,") + "\n";  // 3: ok, next day
+  text += "$GPGGA,000001.50,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*00\n";     // 4: bad checksum
+  text += Nmea("GPGGA,000002.50,4807.040,N,01131.000,E,0,00,99.9,545.4,M,46.9,M,,") + "\n";  // 5: no fix
   text += "$GPGGA,000003.50,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,\n";             // 6: no checksum
-  text += Nmea("GPGSV,3,1,11,03,03,111,00,04,15,270,00,06,01,010,00,13,06,292,00") + "\n";     // ignored
-  text += Nmea("GPGGA,000004.50,48xx.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";     // 8: malformed
-  text += Nmea("GPGGA,000005.50,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";     // 9: ok
-  text += "garbage\n";                                                                        // 10
-  text += Nmea("GPGGA,000004.00,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";     // 11: back in time
+  text += Nmea("GPGSV,3,1,11,03,03,111,00,04,15,270,00,06,01,010,00,13,06,292,00") + "\n";   // ignored
+  text += Nmea("GPGGA,000004.50,48xx.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";   // 8: malformed
+  text += Nmea("GPGGA,000005.50,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";   // 9: ok
+  text += "garbage\n";                                                                       // 10
+  text +=
+      Nmea("GPGGA,000004.00,4807.040,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n";  // 11: back in time
   const auto file = WriteText(dir / "log.nmea", text);
   const GpsLog log = ReadGpsNmea(file);
   ASSERT_EQ(log.fixes.size(), 3u);
@@ -142,12 +145,14 @@ TEST(GpsNmea, SkipsBadSentencesAndUsesTheRmcDate) {
 
 TEST(GpsNmea, DayStartFromOptions) {
   TempDir dir;
-  const auto file = WriteText(dir / "a.nmea", Nmea("GPGGA,000010,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,"));
+  const auto file =
+      WriteText(dir / "a.nmea", Nmea("GPGGA,000010,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,"));
   GpsReadOptions options;
   options.nmea_day_start_unix = 1000.0;
   EXPECT_NEAR(ReadGpsNmea(file, options).fixes.at(0).timestamp, 1010.0, 1e-9);
   options.nmea_require_checksum = false;
-  const auto unchecked = WriteText(dir / "b.nmea", "$GPGGA,000010,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,\n");
+  const auto unchecked =
+      WriteText(dir / "b.nmea", "$GPGGA,000010,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,\n");
   EXPECT_EQ(ReadGpsNmea(unchecked, options).fixes.size(), 1u);
 }
 

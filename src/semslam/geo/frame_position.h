@@ -1,22 +1,42 @@
 #pragma once
-// Positions of frames or keyframes in the SLAM map: the plain input of GPS alignment, landmark association and
-// the topological map.
+// Positions and poses of frames or keyframes in the SLAM map: the plain input of GPS alignment and fusion,
+// landmark association and the topological map.
 
 #include <cstddef>
 #include <vector>
 
 #include "semslam/geometry/eigen_types.h"
+#include "semslam/geometry/rigid3.h"
 
 namespace semslam {
 
 // A frame (or keyframe) position in the SLAM map.
 struct FramePosition {
-  size_t frame_index = 0;  // index in the sequence (sampling counts frames, not keyframes)
-  long long keyframe_id = -1;  // the map's keyframe id when this is a keyframe (reported in outputs)
-  double timestamp = 0.0;  // seconds, frame time base
+  size_t frame_index = 0;                                  // index in the sequence (sampling counts frames)
+  long long keyframe_id = -1;                              // the map's keyframe id when this is a keyframe
+  double timestamp = 0.0;                                  // seconds, frame time base
   Eigen::Vector3d map_position = Eigen::Vector3d::Zero();  // camera centre, map frame
 };
 
 using FramePositions = std::vector<FramePosition>;
+
+// A frame (or keyframe) pose in the SLAM map (the map frame is the SLAM "world").
+struct FramePose {
+  size_t frame_index = 0;
+  long long keyframe_id = -1;
+  double timestamp = 0.0;
+  Rigid3d world_from_camera;  // map_from_camera; its translation is the camera centre
+
+  FramePosition Position() const {
+    return FramePosition{frame_index, keyframe_id, timestamp, world_from_camera.translation};
+  }
+};
+
+inline FramePositions Positions(const std::vector<FramePose>& poses) {
+  FramePositions out;
+  out.reserve(poses.size());
+  for (const FramePose& p : poses) out.push_back(p.Position());
+  return out;
+}
 
 }  // namespace semslam

@@ -1,14 +1,14 @@
 #include "semslam/geo/gps.h"
 
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <map>
-
-#include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include "semslam/core/text_reader.h"
 #include "semslam/geo/csv.h"
@@ -23,7 +23,8 @@ void GpsReadOptions::Check() const {
   Require(std::isfinite(default_sigma_m) && default_sigma_m > 0, "GPS default_sigma_m must be positive");
   Require(std::isfinite(min_sigma_m) && min_sigma_m > 0, "GPS min_sigma_m must be positive");
   Require(std::isfinite(nmea_uere_m) && nmea_uere_m > 0, "GPS nmea_uere_m must be positive");
-  Require(!nmea_day_start_unix || std::isfinite(*nmea_day_start_unix), "GPS nmea_day_start_unix must be finite");
+  Require(!nmea_day_start_unix || std::isfinite(*nmea_day_start_unix),
+          "GPS nmea_day_start_unix must be finite");
   Require(std::isfinite(min_altitude_m) && std::isfinite(max_altitude_m) && min_altitude_m < max_altitude_m,
           "GPS altitude range must be finite and non-empty");
 }
@@ -37,13 +38,13 @@ enum class CsvColumn { kTime, kLat, kLon, kAlt, kSigma, kIgnored };
 CsvColumn ColumnFromName(const std::string& raw) {
   const std::string name = NormalizeColumnName(raw);
   static const std::map<std::string, CsvColumn> names = {
-      {"t", CsvColumn::kTime},        {"time", CsvColumn::kTime},         {"timestamp", CsvColumn::kTime},
-      {"times", CsvColumn::kTime},    {"lat", CsvColumn::kLat},           {"latitude", CsvColumn::kLat},
-      {"latdeg", CsvColumn::kLat},    {"lon", CsvColumn::kLon},           {"lng", CsvColumn::kLon},
-      {"long", CsvColumn::kLon},      {"longitude", CsvColumn::kLon},     {"londeg", CsvColumn::kLon},
-      {"alt", CsvColumn::kAlt},       {"altitude", CsvColumn::kAlt},      {"height", CsvColumn::kAlt},
-      {"altm", CsvColumn::kAlt},      {"sigma", CsvColumn::kSigma},       {"accuracy", CsvColumn::kSigma},
-      {"std", CsvColumn::kSigma},     {"sigmam", CsvColumn::kSigma},      {"stddev", CsvColumn::kSigma}};
+      {"t", CsvColumn::kTime},     {"time", CsvColumn::kTime},     {"timestamp", CsvColumn::kTime},
+      {"times", CsvColumn::kTime}, {"lat", CsvColumn::kLat},       {"latitude", CsvColumn::kLat},
+      {"latdeg", CsvColumn::kLat}, {"lon", CsvColumn::kLon},       {"lng", CsvColumn::kLon},
+      {"long", CsvColumn::kLon},   {"longitude", CsvColumn::kLon}, {"londeg", CsvColumn::kLon},
+      {"alt", CsvColumn::kAlt},    {"altitude", CsvColumn::kAlt},  {"height", CsvColumn::kAlt},
+      {"altm", CsvColumn::kAlt},   {"sigma", CsvColumn::kSigma},   {"accuracy", CsvColumn::kSigma},
+      {"std", CsvColumn::kSigma},  {"sigmam", CsvColumn::kSigma},  {"stddev", CsvColumn::kSigma}};
   const auto it = names.find(name);
   return it == names.end() ? CsvColumn::kIgnored : it->second;
 }
@@ -76,12 +77,13 @@ double UnixDayStart(int year, int month, int day) {
 }
 
 struct NmeaSentence {
-  std::string type;  // "GGA", "RMC", ... (talker removed)
+  std::string type;                      // "GGA", "RMC", ... (talker removed)
   std::vector<std::string_view> fields;  // fields[0] is the address ("GPGGA")
 };
 
 // Verifies framing and checksum; returns nullopt (with `reason`) when the line must be skipped.
-std::optional<NmeaSentence> ParseNmeaSentence(std::string_view line, bool require_checksum, std::string& reason) {
+std::optional<NmeaSentence> ParseNmeaSentence(std::string_view line, bool require_checksum,
+                                              std::string& reason) {
   line = Trim(line);
   if (line.empty() || line.front() != '$') {
     reason = "not an NMEA sentence (does not start with '$')";
@@ -193,20 +195,20 @@ GpsLog ReadGpsCsv(const fs::path& file, const GpsReadOptions& options) {
         for (const std::string& name : fields) columns.push_back(ColumnFromName(name));
         for (const CsvColumn needed : {CsvColumn::kTime, CsvColumn::kLat, CsvColumn::kLon}) {
           if (std::find(columns.begin(), columns.end(), needed) == columns.end()) {
-            throw InputError(where, "header",
-                             "a GPS CSV header must name the columns t, lat and lon (found '" + std::string(text) +
-                                 "')");
+            throw InputError(
+                where, "header",
+                "a GPS CSV header must name the columns t, lat and lon (found '" + std::string(text) + "')");
           }
         }
         continue;
       }
     }
     if (has_header ? fields.size() != columns.size() : (fields.size() < 3 || fields.size() > 5)) {
-      throw InputError(where, "columns",
-                       has_header ? fmt::format("expected {} fields as in the header, found {}", columns.size(),
-                                                fields.size())
-                                  : fmt::format("expected t,lat,lon[,alt,sigma] (3 to 5 fields), found {}",
-                                                fields.size()));
+      throw InputError(
+          where, "columns",
+          has_header
+              ? fmt::format("expected {} fields as in the header, found {}", columns.size(), fields.size())
+              : fmt::format("expected t,lat,lon[,alt,sigma] (3 to 5 fields), found {}", fields.size()));
     }
     GpsFix fix;
     fix.sigma_m = options.default_sigma_m;
@@ -317,7 +319,8 @@ GpsLog ReadGpsNmea(const fs::path& file, const GpsReadOptions& options) {
     const auto lat = ParseNmeaAngle(f[2], f[3], 2, 'N', 'S');
     const auto lon = ParseNmeaAngle(f[4], f[5], 3, 'E', 'W');
     if (!lat || !lon) {
-      collector.Skip(line.where, fmt::format("GGA position '{},{},{},{}' is malformed", f[2], f[3], f[4], f[5]));
+      collector.Skip(line.where,
+                     fmt::format("GGA position '{},{},{},{}' is malformed", f[2], f[3], f[4], f[5]));
       continue;
     }
     const auto altitude = ParseOptionalNumber(f[9]);
@@ -362,7 +365,8 @@ Points3d FixesToEnu(const std::vector<GpsFix>& fixes, const EnuFrame& frame) {
 std::vector<std::optional<size_t>> MatchFixesToTimes(const std::vector<GpsFix>& fixes,
                                                      const std::vector<double>& times, double tolerance_s,
                                                      double time_offset_s) {
-  Require(tolerance_s >= 0 && std::isfinite(tolerance_s), "GPS match tolerance must be a non-negative number");
+  Require(tolerance_s >= 0 && std::isfinite(tolerance_s),
+          "GPS match tolerance must be a non-negative number");
   std::vector<std::optional<size_t>> matches(times.size());
   if (fixes.empty()) return matches;
   for (size_t i = 0; i < times.size(); ++i) {

@@ -20,10 +20,11 @@
 namespace semslam {
 
 struct GpsFix {
-  double timestamp = 0.0;  // seconds, in the source's time base (oxts: Unix; NMEA: Unix UTC, see options; CSV: as given)
-  Wgs84 position;          // altitude: height above the WGS84 ellipsoid when the source gives it
-  double sigma_m = 1.0;    // 1-sigma position uncertainty, metres
-  SourceLocation source;   // where the fix was read
+  double timestamp =
+      0.0;  // seconds, in the source's time base (oxts: Unix; NMEA: Unix UTC, see options; CSV: as given)
+  Wgs84 position;         // altitude: height above the WGS84 ellipsoid when the source gives it
+  double sigma_m = 1.0;   // 1-sigma position uncertainty, metres
+  SourceLocation source;  // where the fix was read
 };
 
 // A fix that was read but not accepted.

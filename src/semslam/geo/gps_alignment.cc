@@ -1,5 +1,6 @@
 #include "semslam/geo/gps_alignment.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -19,12 +20,15 @@ void GpsSamplingOptions::Check() const {
 void GpsAlignmentOptions::Check() const {
   Require(min_samples >= 3, "GPS alignment min_samples must be at least 3");
   Require(ransac_iterations >= 0, "GPS alignment ransac_iterations must be >= 0");
-  Require(std::isfinite(inlier_threshold_m) && inlier_threshold_m > 0, "GPS inlier_threshold_m must be positive");
-  Require(std::isfinite(inlier_sigma_factor) && inlier_sigma_factor >= 0, "GPS inlier_sigma_factor must be >= 0");
+  Require(std::isfinite(inlier_threshold_m) && inlier_threshold_m > 0,
+          "GPS inlier_threshold_m must be positive");
+  Require(std::isfinite(inlier_sigma_factor) && inlier_sigma_factor >= 0,
+          "GPS inlier_sigma_factor must be >= 0");
   Require(std::isfinite(inlier_mad_factor) && inlier_mad_factor >= 0, "GPS inlier_mad_factor must be >= 0");
   Require(irls_iterations >= 0, "GPS irls_iterations must be >= 0");
   Require(std::isfinite(cauchy_scale) && cauchy_scale > 0, "GPS cauchy_scale must be positive");
   Require(min_triangle_sine >= 0 && min_triangle_sine < 1, "GPS min_triangle_sine must be in [0, 1)");
+  Require(min_spread_ratio >= 0 && min_spread_ratio < 1, "GPS min_spread_ratio must be in [0, 1)");
 }
 
 namespace {
@@ -63,17 +67,32 @@ double TriangleSine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   const double lab = ab.norm(), lac = ac.norm(), lbc = bc.norm();
   const double longest = std::max({lab, lac, lbc});
   if (longest <= 0) return 0.0;
-  // sin(angle) = 2*area / (product of the two adjacent sides); the smallest angle is opposite the shortest side,
-  // between the two longer ones.
+  // sin(angle) = 2*area / (product of the two adjacent sides); the smallest angle is opposite the shortest
+  // side, between the two longer ones.
   const double shortest = std::min({lab, lac, lbc});
   const double middle = lab + lac + lbc - longest - shortest;
   return middle > 0 ? area2 / (longest * middle) : 0.0;
 }
 
+// sqrt(second / largest eigenvalue) of the points' scatter: 0 on a line, 1 for an isotropic spread.
+double SpreadRatio(const Points3d& points) {
+  if (points.size() < 2) return 0.0;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& p : points) scatter += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter, Eigen::EigenvaluesOnly);
+  const Eigen::Vector3d eig = solver.eigenvalues();  // ascending
+  if (!(eig(2) > 0)) return 0.0;
+  return std::sqrt(std::max(eig(1), 0.0) / eig(2));
+}
+
 }  // namespace
 
-std::vector<GpsSample> SampleGpsPairs(const std::vector<FramePosition>& frames, const std::vector<GpsFix>& fixes,
-                                      const EnuFrame& enu_frame, const GpsSamplingOptions& options) {
+std::vector<GpsSample> SampleGpsPairs(const std::vector<FramePosition>& frames,
+                                      const std::vector<GpsFix>& fixes, const EnuFrame& enu_frame,
+                                      const GpsSamplingOptions& options) {
   GpsSampler sampler(fixes, enu_frame, options);
   std::vector<GpsSample> samples;
   for (const FramePosition& frame : frames) {
@@ -90,8 +109,8 @@ GpsSampler::GpsSampler(std::vector<GpsFix> fixes, EnuFrame enu_frame, GpsSamplin
 std::optional<GpsSample> GpsSampler::AddFrame(const FramePosition& frame) {
   if (next_frame_ && frame.frame_index < *next_frame_) return std::nullopt;
   if (!frame.map_position.allFinite()) return std::nullopt;
-  const auto match = MatchFixesToTimes(fixes_, {frame.timestamp}, options_.match_tolerance_s,
-                                       options_.time_offset_s)[0];
+  const auto match =
+      MatchFixesToTimes(fixes_, {frame.timestamp}, options_.match_tolerance_s, options_.time_offset_s)[0];
   if (!match) return std::nullopt;  // no fix here (dropout): try the next frame
   // The next sample at the next multiple of N after this frame's slot.
   const size_t n = static_cast<size_t>(options_.every_n_frames);
@@ -139,6 +158,10 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
     base_weight[i] = 1.0 / (samples[i].sigma_m * samples[i].sigma_m);
   }
 
+  // Nearly collinear map positions leave the roll about their line undetermined (a straight drive with a
+  // gentle grade is not "exactly" collinear, so Umeyama alone would return an arbitrary roll).
+  if (SpreadRatio(src) < options.min_spread_ratio) return std::nullopt;
+
   // RANSAC (MSAC scoring) over minimal triples.
   std::optional<Sim3d> best;
   double best_cost = std::numeric_limits<double>::infinity();
@@ -156,7 +179,8 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
       if (!model) continue;
       double cost = 0.0;
       for (size_t i = 0; i < n; ++i) {
-        const double threshold = std::max(options.inlier_threshold_m, options.inlier_sigma_factor * samples[i].sigma_m);
+        const double threshold =
+            std::max(options.inlier_threshold_m, options.inlier_sigma_factor * samples[i].sigma_m);
         cost += std::min((tgt[i] - *model * src[i]).squaredNorm(), threshold * threshold);
       }
       if (cost < best_cost) {
@@ -165,6 +189,8 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
       }
     }
   }
+  // Every minimal triple degenerate: the positions lie nearly on one line (a straight drive so far).
+  if (options.ransac_iterations > 0 && !best) return std::nullopt;
   if (!best) best = Fit(src, tgt, base_weight, options.estimate_scale);
   if (!best) return std::nullopt;
 
@@ -190,7 +216,9 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
   return current;
 }
 
-IncrementalGpsAligner::IncrementalGpsAligner(GpsAlignmentOptions options) : options_(options) { options_.Check(); }
+IncrementalGpsAligner::IncrementalGpsAligner(GpsAlignmentOptions options) : options_(options) {
+  options_.Check();
+}
 
 const std::optional<GpsAlignment>& IncrementalGpsAligner::Add(const GpsSample& sample) {
   samples_.push_back(sample);

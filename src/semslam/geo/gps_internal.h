@@ -1,11 +1,12 @@
 #pragma once
 // Shared by the GPS readers (not part of the API).
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
-
-#include <fmt/format.h>
 
 #include "semslam/geo/gps.h"
 
@@ -16,16 +17,28 @@ class FixCollector {
  public:
   FixCollector(GpsLog& log, const GpsReadOptions& options) : log_(log), options_(options) {}
 
-  void Skip(const SourceLocation& where, std::string reason) { log_.skipped.push_back({where, std::move(reason)}); }
+  void Skip(const SourceLocation& where, std::string reason) {
+    log_.skipped.push_back({where, std::move(reason)});
+  }
 
   void Add(GpsFix fix) {
     const SourceLocation& where = fix.source;
     const Wgs84& p = fix.position;
     if (!std::isfinite(fix.timestamp)) return Skip(where, "time is not a finite number");
+    // Time order is checked against the previous record with a finite time (accepted or not: a record that
+    // goes back in time is out of order even when the one before it was rejected for its position) and
+    // against the last accepted fix (the log stays strictly increasing).
+    const std::optional<double> previous_record = previous_time_;
+    previous_time_ = fix.timestamp;
+    if (previous_record && fix.timestamp <= *previous_record) {
+      return Skip(where, fmt::format("time {:.6f} is not after the previous record's {:.6f} (non-monotonic)",
+                                     fix.timestamp, *previous_record));
+    }
     if (!std::isfinite(p.latitude_deg) || !std::isfinite(p.longitude_deg) || !std::isfinite(p.altitude_m)) {
       return Skip(where, "position is not finite (NaN or infinite)");
     }
-    if (std::abs(p.latitude_deg) > 90.0) return Skip(where, fmt::format("latitude {} out of range", p.latitude_deg));
+    if (std::abs(p.latitude_deg) > 90.0)
+      return Skip(where, fmt::format("latitude {} out of range", p.latitude_deg));
     if (std::abs(p.longitude_deg) > 180.0) {
       return Skip(where, fmt::format("longitude {} out of range", p.longitude_deg));
     }
@@ -46,6 +59,7 @@ class FixCollector {
  private:
   GpsLog& log_;
   const GpsReadOptions& options_;
+  std::optional<double> previous_time_;
 };
 
 }  // namespace semslam::gps_internal

@@ -1,9 +1,9 @@
 // KITTI oxts GPS input (through io's reader) and the format dispatch. Kept apart from gps.cc so that the CSV
 // and NMEA readers do not pull the io module in.
 
-#include <fstream>
-
 #include <fmt/format.h>
+
+#include <fstream>
 
 #include "semslam/geo/gps.h"
 #include "semslam/geo/gps_internal.h"
@@ -18,7 +18,8 @@ namespace {
 
 fs::path FindOxtsFolder(const fs::path& path) {
   for (const fs::path& candidate : {path, path / "oxts"}) {
-    if (fs::is_regular_file(candidate / "timestamps.txt") && fs::is_directory(candidate / "data")) return candidate;
+    if (fs::is_regular_file(candidate / "timestamps.txt") && fs::is_directory(candidate / "data"))
+      return candidate;
   }
   throw InputError(path, "not a KITTI oxts folder (expected timestamps.txt and data/, here or under oxts/)");
 }
@@ -38,7 +39,8 @@ GpsLog ReadGpsOxts(const fs::path& path, const GpsReadOptions& options) {
     GpsFix fix;
     fix.timestamp = readings[i].timestamp;
     fix.position = Wgs84{r.lat, r.lon, r.alt};
-    fix.sigma_m = options.oxts_use_pos_accuracy && r.pos_accuracy > 0 ? r.pos_accuracy : options.default_sigma_m;
+    fix.sigma_m =
+        options.oxts_use_pos_accuracy && r.pos_accuracy > 0 ? r.pos_accuracy : options.default_sigma_m;
     fix.source = SourceLocation{dir / "data" / fmt::format("{:010d}.txt", i), 1};
     collector.Add(std::move(fix));
   }

@@ -1,9 +1,9 @@
 #include "semslam/geo/wgs84.h"
 
+#include <fmt/format.h>
+
 #include <GeographicLib/LocalCartesian.hpp>
 #include <cmath>
-
-#include <fmt/format.h>
 
 #include "semslam/core/error.h"
 
@@ -29,7 +29,8 @@ EnuFrame::EnuFrame(const Wgs84& origin) : origin_(origin) {
 }
 
 EnuFrame::~EnuFrame() = default;
-EnuFrame::EnuFrame(const EnuFrame& other) : origin_(other.origin_), impl_(std::make_unique<Impl>(*other.impl_)) {}
+EnuFrame::EnuFrame(const EnuFrame& other)
+    : origin_(other.origin_), impl_(std::make_unique<Impl>(*other.impl_)) {}
 EnuFrame& EnuFrame::operator=(const EnuFrame& other) {
   if (this != &other) {
     origin_ = other.origin_;

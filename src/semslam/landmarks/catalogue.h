@@ -14,10 +14,10 @@ namespace semslam {
 
 struct Landmark {
   std::string name;
-  Wgs84 position;             // altitude meaningful only when has_altitude
+  Wgs84 position;  // altitude meaningful only when has_altitude
   bool has_altitude = false;
-  std::string category;       // free text ("building", "amenity=cafe"); may be empty
-  SourceLocation source;      // where it was read
+  std::string category;   // free text ("building", "amenity=cafe"); may be empty
+  SourceLocation source;  // where it was read
 };
 
 // CSV `name,lat,lon[,alt,category]`. An optional header names the columns (name|title|label, lat|latitude,
@@ -43,10 +43,12 @@ struct OsmLandmarkOptions {
 };
 
 // Named nodes, and named ways at their centroid (the mean of their node locations).
-std::vector<Landmark> ReadLandmarksOsm(const std::filesystem::path& file, const OsmLandmarkOptions& options = {});
+std::vector<Landmark> ReadLandmarksOsm(const std::filesystem::path& file,
+                                       const OsmLandmarkOptions& options = {});
 
 // By extension: .csv; .geojson/.json; .osm, .osm.gz, .osm.bz2, .pbf, .osm.pbf.
-std::vector<Landmark> ReadLandmarks(const std::filesystem::path& file, const OsmLandmarkOptions& osm_options = {});
+std::vector<Landmark> ReadLandmarks(const std::filesystem::path& file,
+                                    const OsmLandmarkOptions& osm_options = {});
 
 // Names made unique ("Cafe", "Cafe (2)", ...), so that a route can name them.
 void MakeLandmarkNamesUnique(std::vector<Landmark>& landmarks);

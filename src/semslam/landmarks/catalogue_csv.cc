@@ -1,12 +1,12 @@
 // CSV landmark catalogues, format dispatch, unique names.
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <map>
 #include <set>
-
-#include <fmt/format.h>
 
 #include "semslam/core/text_reader.h"
 #include "semslam/geo/csv.h"
@@ -22,13 +22,13 @@ enum class Column { kName, kLat, kLon, kAlt, kCategory, kIgnored };
 
 Column ColumnFromName(const std::string& raw) {
   static const std::map<std::string, Column> names = {
-      {"name", Column::kName},         {"title", Column::kName},        {"label", Column::kName},
-      {"lat", Column::kLat},           {"latitude", Column::kLat},      {"latdeg", Column::kLat},
-      {"lon", Column::kLon},           {"lng", Column::kLon},           {"long", Column::kLon},
-      {"longitude", Column::kLon},     {"londeg", Column::kLon},        {"alt", Column::kAlt},
-      {"altitude", Column::kAlt},      {"height", Column::kAlt},        {"elevation", Column::kAlt},
-      {"altm", Column::kAlt},          {"category", Column::kCategory}, {"type", Column::kCategory},
-      {"class", Column::kCategory},    {"kind", Column::kCategory}};
+      {"name", Column::kName},      {"title", Column::kName},        {"label", Column::kName},
+      {"lat", Column::kLat},        {"latitude", Column::kLat},      {"latdeg", Column::kLat},
+      {"lon", Column::kLon},        {"lng", Column::kLon},           {"long", Column::kLon},
+      {"longitude", Column::kLon},  {"londeg", Column::kLon},        {"alt", Column::kAlt},
+      {"altitude", Column::kAlt},   {"height", Column::kAlt},        {"elevation", Column::kAlt},
+      {"altm", Column::kAlt},       {"category", Column::kCategory}, {"type", Column::kCategory},
+      {"class", Column::kCategory}, {"kind", Column::kCategory}};
   const auto it = names.find(NormalizeColumnName(raw));
   return it == names.end() ? Column::kIgnored : it->second;
 }
@@ -63,25 +63,31 @@ std::vector<Landmark> ReadLandmarksCsv(const fs::path& file) {
     const std::vector<std::string> fields = SplitCsvRecord(text, where);
     if (first_record) {
       first_record = false;
-      if (fields.size() < 2 || !LooksNumeric(fields[1])) {
+      // A header names at least one known column and has no number where the latitude goes ("A,nan,8" is a
+      // record with a bad latitude, not a header).
+      const bool names_a_column = std::any_of(fields.begin(), fields.end(), [](const std::string& f) {
+        return ColumnFromName(f) != Column::kIgnored;
+      });
+      if (names_a_column && (fields.size() < 2 || !LooksNumeric(fields[1]))) {
         has_header = true;
         columns.clear();
         for (const std::string& name : fields) columns.push_back(ColumnFromName(name));
-        for (const auto& [needed, label] :
-             {std::pair{Column::kName, "name"}, std::pair{Column::kLat, "lat"}, std::pair{Column::kLon, "lon"}}) {
+        for (const auto& [needed, label] : {std::pair{Column::kName, "name"}, std::pair{Column::kLat, "lat"},
+                                            std::pair{Column::kLon, "lon"}}) {
           if (std::find(columns.begin(), columns.end(), needed) == columns.end()) {
-            throw InputError(where, "header", fmt::format("a landmark CSV header needs a '{}' column", label));
+            throw InputError(where, "header",
+                             fmt::format("a landmark CSV header needs a '{}' column", label));
           }
         }
         continue;
       }
     }
     if (has_header ? fields.size() != columns.size() : (fields.size() < 3 || fields.size() > 5)) {
-      throw InputError(where, "columns",
-                       has_header ? fmt::format("expected {} fields as in the header, found {}", columns.size(),
-                                                fields.size())
-                                  : fmt::format("expected name,lat,lon[,alt,category] (3 to 5 fields), found {}",
-                                                fields.size()));
+      throw InputError(
+          where, "columns",
+          has_header
+              ? fmt::format("expected {} fields as in the header, found {}", columns.size(), fields.size())
+              : fmt::format("expected name,lat,lon[,alt,category] (3 to 5 fields), found {}", fields.size()));
     }
     Landmark landmark;
     landmark.source = where;
@@ -126,13 +132,14 @@ std::vector<Landmark> ReadLandmarks(const fs::path& file, const OsmLandmarkOptio
   const std::string name = Lower(file.filename().string());
   if (EndsWith(name, ".csv") || EndsWith(name, ".txt")) return ReadLandmarksCsv(file);
   if (EndsWith(name, ".geojson") || EndsWith(name, ".json")) return ReadLandmarksGeoJson(file);
-  if (EndsWith(name, ".osm") || EndsWith(name, ".pbf") || EndsWith(name, ".osm.gz") || EndsWith(name, ".osm.bz2") ||
-      EndsWith(name, ".osm.xml")) {
+  if (EndsWith(name, ".osm") || EndsWith(name, ".pbf") || EndsWith(name, ".osm.gz") ||
+      EndsWith(name, ".osm.bz2") || EndsWith(name, ".osm.xml")) {
     return ReadLandmarksOsm(file, osm_options);
   }
-  throw InputError(file,
-                   "unknown landmark catalogue format (expected .csv, .geojson, .json, .osm, .osm.gz, .osm.bz2 or "
-                   ".osm.pbf)");
+  throw InputError(
+      file,
+      "unknown landmark catalogue format (expected .csv, .geojson, .json, .osm, .osm.gz, .osm.bz2 or "
+      ".osm.pbf)");
 }
 
 void MakeLandmarkNamesUnique(std::vector<Landmark>& landmarks) {

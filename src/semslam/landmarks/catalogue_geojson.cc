@@ -1,13 +1,12 @@
 // GeoJSON landmark catalogues (nlohmann_json stays in this file).
 
-#include <nlohmann/json.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
-
-#include <fmt/format.h>
-#include <spdlog/spdlog.h>
 
 #include "semslam/landmarks/catalogue.h"
 
@@ -88,7 +87,8 @@ std::vector<int> ArrayElementLines(std::string_view text, std::string_view key) 
 
 int LineOfByte(std::string_view text, size_t byte) {
   byte = std::min(byte, text.size());
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
+  return 1 +
+         static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
 }
 
 std::string StringProperty(const json& properties, std::initializer_list<const char*> keys) {
@@ -162,7 +162,8 @@ std::vector<Landmark> ReadLandmarksGeoJson(const fs::path& file) {
     for (size_t k = 0; k < coordinates->size(); ++k) {
       const json& v = (*coordinates)[k];
       if (!v.is_number() || !std::isfinite(v.get<double>())) {
-        throw InputError(where, fmt::format("{}geometry.coordinates[{}]", field, k), "expected a finite number");
+        throw InputError(where, fmt::format("{}geometry.coordinates[{}]", field, k),
+                         "expected a finite number");
       }
     }
     Landmark landmark;

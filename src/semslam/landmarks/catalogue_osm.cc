@@ -1,17 +1,16 @@
 // OpenStreetMap extracts through libosmium (kept in this file: it is heavy to compile).
 
+#include <fmt/format.h>
+
+#include <cmath>
+#include <optional>
 #include <osmium/handler.hpp>
 #include <osmium/handler/node_locations_for_ways.hpp>
 #include <osmium/index/map/flex_mem.hpp>
 #include <osmium/io/any_input.hpp>
 #include <osmium/visitor.hpp>
-
-#include <cmath>
-#include <optional>
 #include <string_view>
 #include <unordered_map>
-
-#include <fmt/format.h>
 
 #include "semslam/landmarks/catalogue.h"
 
@@ -27,9 +26,9 @@ void OsmLandmarkOptions::Check() const {
 namespace {
 
 // Tags that make a named object a landmark, in order of preference for its category.
-constexpr std::string_view kCategoryKeys[] = {"amenity", "tourism",  "historic",        "shop",    "leisure",
-                                              "office",  "building", "public_transport", "railway", "man_made",
-                                              "natural", "place",    "landuse",          "highway"};
+constexpr std::string_view kCategoryKeys[] = {
+    "amenity",          "tourism", "historic", "shop",    "leisure", "office",  "building",
+    "public_transport", "railway", "man_made", "natural", "place",   "landuse", "highway"};
 
 bool IsNameKey(std::string_view key) {
   return key == "name" || key.rfind("name:", 0) == 0 || key == "alt_name" || key == "old_name" ||
@@ -39,7 +38,8 @@ bool IsNameKey(std::string_view key) {
 
 std::string Category(const osmium::TagList& tags) {
   for (const std::string_view key : kCategoryKeys) {
-    if (const char* value = tags.get_value_by_key(std::string(key).c_str())) return fmt::format("{}={}", key, value);
+    if (const char* value = tags.get_value_by_key(std::string(key).c_str()))
+      return fmt::format("{}={}", key, value);
   }
   return {};
 }
@@ -90,7 +90,8 @@ class TrajectoryNeighbourhood {
 
  private:
   std::pair<long long, long long> Cell(const Eigen::Vector2d& p) const {
-    return {static_cast<long long>(std::floor(p.x() / radius_m_)), static_cast<long long>(std::floor(p.y() / radius_m_))};
+    return {static_cast<long long>(std::floor(p.x() / radius_m_)),
+            static_cast<long long>(std::floor(p.y() / radius_m_))};
   }
   static long long Key(long long x, long long y) { return x * 73856093LL ^ y * 19349663LL; }
   void Insert(const Eigen::Vector2d& p) {

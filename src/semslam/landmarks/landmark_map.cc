@@ -20,12 +20,14 @@ Membership GaussianMembership(double distance_m, double sigma_m) {
   return Membership{value, value / (2.0 * std::numbers::pi * sigma_m * sigma_m)};
 }
 
-Membership GaussianMembership(const Eigen::Vector2d& position, const Eigen::Vector2d& landmark, double sigma_m) {
+Membership GaussianMembership(const Eigen::Vector2d& position, const Eigen::Vector2d& landmark,
+                              double sigma_m) {
   return GaussianMembership((position - landmark).norm(), sigma_m);
 }
 
-std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogue, const Georeference& georeference,
-                                           const FramePositions& keyframes, const LandmarkOptions& options) {
+std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogue,
+                                           const Georeference& georeference, const FramePositions& keyframes,
+                                           const LandmarkOptions& options) {
   options.Check();
   Points3d keyframe_enu;
   keyframe_enu.reserve(keyframes.size());
@@ -36,7 +38,11 @@ std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogu
   for (const Landmark& landmark : catalogue) {
     PlacedLandmark p;
     p.landmark = landmark;
-    p.enu = georeference.enu_frame.ToEnu(landmark.position);
+    // Without an altitude, the horizontal position is taken at the origin's height first (the ellipsoid's
+    // height 0 could be hundreds of metres below the area and bend east/north by centimetres per km).
+    Wgs84 position = landmark.position;
+    if (!landmark.has_altitude) position.altitude_m = georeference.enu_frame.origin().altitude_m;
+    p.enu = georeference.enu_frame.ToEnu(position);
     int nearest = -1;
     double nearest_distance = std::numeric_limits<double>::infinity();
     for (size_t k = 0; k < keyframe_enu.size(); ++k) {
@@ -46,7 +52,14 @@ std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogu
         nearest = static_cast<int>(k);
       }
     }
-    if (!landmark.has_altitude && nearest >= 0) p.enu.z() = keyframe_enu[static_cast<size_t>(nearest)].z();
+    if (!landmark.has_altitude && nearest >= 0) {
+      // At the nearest keyframe's height (the camera's: the landmark is placed on the driven level).
+      const Eigen::Vector3d& k = keyframe_enu[static_cast<size_t>(nearest)];
+      position.altitude_m = georeference.enu_frame.ToWgs84(k).altitude_m;
+      p.enu = georeference.enu_frame.ToEnu(position);
+      p.enu.z() = k.z();
+      nearest_distance = (k.head<2>() - p.enu.head<2>()).norm();
+    }
     if (!landmark.has_altitude && nearest < 0) p.enu.z() = 0.0;
     if (nearest >= 0 && nearest_distance <= options.max_association_distance_m) {
       p.nearest_keyframe = nearest;
@@ -55,7 +68,10 @@ std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogu
     } else if (nearest >= 0) {
       p.keyframe_distance_m = nearest_distance;
     }
-    p.map_position = georeference.EnuToMap(p.enu);
+    // Into the map near the associated keyframe (the same place may be in a drifting map twice).
+    p.map_position =
+        nearest >= 0 ? georeference.EnuToMapAt(p.enu, keyframes[static_cast<size_t>(nearest)].map_position)
+                     : georeference.EnuToMap(p.enu);
     placed.push_back(std::move(p));
   }
   return placed;
@@ -77,7 +93,8 @@ std::vector<std::vector<Membership>> KeyframeMemberships(const FramePositions& k
 
 std::vector<NearLandmark> NearestLandmarks(const Eigen::Vector3d& map_position,
                                            const std::vector<PlacedLandmark>& landmarks,
-                                           const Georeference& georeference, double sigma_m, size_t max_count) {
+                                           const Georeference& georeference, double sigma_m,
+                                           size_t max_count) {
   Require(std::isfinite(sigma_m) && sigma_m > 0, "membership sigma_m must be positive");
   const Eigen::Vector2d p = georeference.MapToEnu(map_position).head<2>();
   std::vector<NearLandmark> near;
@@ -93,9 +110,9 @@ std::vector<NearLandmark> NearestLandmarks(const Eigen::Vector3d& map_position,
   return near;
 }
 
-MembershipRaster RasterizeMembership(const std::vector<PlacedLandmark>& landmarks, const Eigen::Vector2d& enu_min,
-                                     const Eigen::Vector2d& enu_max, double cell_m, double sigma_m,
-                                     size_t max_cells) {
+MembershipRaster RasterizeMembership(const std::vector<PlacedLandmark>& landmarks,
+                                     const Eigen::Vector2d& enu_min, const Eigen::Vector2d& enu_max,
+                                     double cell_m, double sigma_m, size_t max_cells) {
   Require(std::isfinite(sigma_m) && sigma_m > 0, "membership sigma_m must be positive");
   Require(std::isfinite(cell_m) && cell_m > 0, "raster cell size must be positive");
   Require(enu_min.allFinite() && enu_max.allFinite() && (enu_max.array() >= enu_min.array()).all(),

@@ -7,7 +7,8 @@
 //  - `membership` (normalized): exp(-d^2 / (2 sigma^2)), 1 at the landmark. This is the fuzzy membership
 //    degree used wherever a number is compared or shown: landmarks.geojson's "membership", nearest-landmark
 //    lists of localization, the raster plot.
-//  - `membership_pdf`: exp(-d^2 / (2 sigma^2)) / (2 pi sigma^2), the paper's PDF value, in 1/m^2; it integrates to
+//  - `membership_pdf`: exp(-d^2 / (2 sigma^2)) / (2 pi sigma^2), the paper's PDF value, in 1/m^2; it
+//  integrates to
 //    1 over the plane, so it is the one to use as a likelihood (e.g. weighing candidate places), and it is
 //    written next to the normalized value.
 
@@ -29,7 +30,8 @@ struct Membership {
 // Membership at horizontal distance `distance_m` from a landmark.
 Membership GaussianMembership(double distance_m, double sigma_m);
 // Between horizontal positions (metres; ENU x, y).
-Membership GaussianMembership(const Eigen::Vector2d& position, const Eigen::Vector2d& landmark, double sigma_m);
+Membership GaussianMembership(const Eigen::Vector2d& position, const Eigen::Vector2d& landmark,
+                              double sigma_m);
 
 struct LandmarkOptions {
   double sigma_m = 25.0;  // membership standard deviation
@@ -51,9 +53,11 @@ struct PlacedLandmark {
 };
 
 // Transforms the catalogue into the map and associates each landmark with its nearest keyframe (horizontal
-// ENU distance). `keyframes` may be empty (no association).
-std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogue, const Georeference& georeference,
-                                           const FramePositions& keyframes, const LandmarkOptions& options = {});
+// ENU distance); the map position goes through that keyframe's place (Georeference::EnuToMapAt). `keyframes`
+// may be empty (no association).
+std::vector<PlacedLandmark> PlaceLandmarks(const std::vector<Landmark>& catalogue,
+                                           const Georeference& georeference, const FramePositions& keyframes,
+                                           const LandmarkOptions& options = {});
 
 // memberships[k][l]: keyframe k's membership to landmark l.
 std::vector<std::vector<Membership>> KeyframeMemberships(const FramePositions& keyframes,
@@ -68,7 +72,8 @@ struct NearLandmark {
 // The landmarks nearest a map position (horizontal ENU distance), nearest first, at most `max_count`.
 std::vector<NearLandmark> NearestLandmarks(const Eigen::Vector3d& map_position,
                                            const std::vector<PlacedLandmark>& landmarks,
-                                           const Georeference& georeference, double sigma_m, size_t max_count = 3);
+                                           const Georeference& georeference, double sigma_m,
+                                           size_t max_count = 3);
 
 // The membership field on a grid in the ENU plane: cell (col, row) is centred at
 // origin + ((col + 0.5) * cell_m, (row + 0.5) * cell_m); row 0 is the southernmost.
@@ -86,14 +91,20 @@ struct MembershipRaster {
 };
 
 // Over the given ENU rectangle [min, max]; the cell size grows if needed to keep at most max_cells cells.
-MembershipRaster RasterizeMembership(const std::vector<PlacedLandmark>& landmarks, const Eigen::Vector2d& enu_min,
-                                     const Eigen::Vector2d& enu_max, double cell_m, double sigma_m,
-                                     size_t max_cells = 4'000'000);
+MembershipRaster RasterizeMembership(const std::vector<PlacedLandmark>& landmarks,
+                                     const Eigen::Vector2d& enu_min, const Eigen::Vector2d& enu_max,
+                                     double cell_m, double sigma_m, size_t max_cells = 4'000'000);
 
 // landmarks.geojson: a FeatureCollection of Points (WGS84 [lon, lat, alt]) with properties name, category,
 // map_xyz, enu, nearest keyframe (index, keyframe id, frame index), its distance, membership and
 // membership_pdf, and sigma_m.
 void WriteLandmarksGeoJson(const std::filesystem::path& path, const std::vector<PlacedLandmark>& landmarks,
                            const FramePositions& keyframes, double sigma_m);
+
+// Placed landmarks as compact JSON (for the map file's extra sections) and back; the parser throws InputError
+// naming `source` and the field.
+std::string PlacedLandmarksToJson(const std::vector<PlacedLandmark>& landmarks);
+std::vector<PlacedLandmark> PlacedLandmarksFromJson(const std::string& text,
+                                                    const std::filesystem::path& source);
 
 }  // namespace semslam

@@ -1,14 +1,13 @@
 #include "semslam/topology/routing.h"
 
-#include <boost/graph/adjacency_list.hpp>
-#include <boost/graph/dijkstra_shortest_paths.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
+#include <boost/graph/adjacency_list.hpp>
+#include <boost/graph/dijkstra_shortest_paths.hpp>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
-
-#include <fmt/format.h>
 
 #include "semslam/core/error.h"
 
@@ -20,7 +19,8 @@ struct EdgeProperties {
   double length = 0.0;
   int id = -1;
 };
-using Graph = boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, boost::no_property, EdgeProperties>;
+using Graph =
+    boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, boost::no_property, EdgeProperties>;
 
 double PolylineLength(const Points3d& points) {
   double length = 0.0;
@@ -40,14 +40,16 @@ Eigen::Vector3d PointAt(const Points3d& points, const std::vector<double>& arc, 
 std::string Compass(const Eigen::Vector2d& direction) {
   static const char* kNames[] = {"north", "north-east", "east", "south-east",
                                  "south", "south-west", "west", "north-west"};
-  const double bearing = std::atan2(direction.x(), direction.y()) * 180.0 / std::numbers::pi;  // from north, clockwise
+  const double bearing =
+      std::atan2(direction.x(), direction.y()) * 180.0 / std::numbers::pi;  // from north, clockwise
   const int sector = static_cast<int>(std::lround((bearing < 0 ? bearing + 360.0 : bearing) / 45.0)) % 8;
   return kNames[sector];
 }
 
 // "on your left/right" for a landmark seen from `at` while travelling along `direction`; empty when it is
 // (nearly) ahead or behind or too close to tell.
-std::string Side(const Eigen::Vector3d& at, const Eigen::Vector2d& direction, const Eigen::Vector3d& landmark) {
+std::string Side(const Eigen::Vector3d& at, const Eigen::Vector2d& direction,
+                 const Eigen::Vector3d& landmark) {
   const Eigen::Vector2d to = (landmark - at).head<2>();
   if (to.norm() < 2.0 || direction.norm() < 1e-9) return {};
   const double cross = direction.x() * to.y() - direction.y() * to.x();
@@ -86,21 +88,24 @@ std::string FormatDistance(double metres) {
 
 Route ShortestPath(const TopologicalMap& map, int from_node, int to_node) {
   const size_t n = map.nodes.size();
-  Require(from_node >= 0 && static_cast<size_t>(from_node) < n && to_node >= 0 && static_cast<size_t>(to_node) < n,
+  Require(from_node >= 0 && static_cast<size_t>(from_node) < n && to_node >= 0 &&
+              static_cast<size_t>(to_node) < n,
           "route: node id out of range");
   Graph graph(n);
   for (const TopoEdge& e : map.edges) {
-    boost::add_edge(static_cast<size_t>(e.from), static_cast<size_t>(e.to), EdgeProperties{e.length_m, e.id}, graph);
+    boost::add_edge(static_cast<size_t>(e.from), static_cast<size_t>(e.to), EdgeProperties{e.length_m, e.id},
+                    graph);
   }
   std::vector<size_t> predecessor(n);
   std::vector<double> distance(n);
-  boost::dijkstra_shortest_paths(
-      graph, static_cast<size_t>(from_node),
-      boost::predecessor_map(predecessor.data()).distance_map(distance.data()).weight_map(
-          boost::get(&EdgeProperties::length, graph)));
+  boost::dijkstra_shortest_paths(graph, static_cast<size_t>(from_node),
+                                 boost::predecessor_map(predecessor.data())
+                                     .distance_map(distance.data())
+                                     .weight_map(boost::get(&EdgeProperties::length, graph)));
 
   Route route;
-  if (from_node != to_node && predecessor[static_cast<size_t>(to_node)] == static_cast<size_t>(to_node)) return route;
+  if (from_node != to_node && predecessor[static_cast<size_t>(to_node)] == static_cast<size_t>(to_node))
+    return route;
   for (size_t v = static_cast<size_t>(to_node);; v = predecessor[v]) {
     route.nodes.push_back(static_cast<int>(v));
     if (v == static_cast<size_t>(from_node)) break;
@@ -146,7 +151,8 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
     const double s1 = std::min(node_arc[i] + window, i + 1 < node_arc.size() ? node_arc[i + 1] : arc.back());
     return (PointAt(line, arc, s1) - PointAt(line, arc, node_arc[i])).head<2>();
   };
-  const auto landmark_side = [&](int node, const Eigen::Vector2d& direction, int landmark = -1) -> std::string {
+  const auto landmark_side = [&](int node, const Eigen::Vector2d& direction,
+                                 int landmark = -1) -> std::string {
     const TopoNode& n = map.nodes[static_cast<size_t>(node)];
     if (landmark < 0 && n.landmarks.empty()) return {};
     if (landmark < 0) landmark = n.landmarks.front();
@@ -169,7 +175,8 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
   for (size_t i = 1; i < route.nodes.size(); ++i) {
     pending += node_arc[i] - node_arc[i - 1];
     const int node = route.nodes[i];
-    const std::string names = i + 1 == route.nodes.size() ? endpoint_name(route.to_landmark, node) : NodeNames(map, node);
+    const std::string names =
+        i + 1 == route.nodes.size() ? endpoint_name(route.to_landmark, node) : NodeNames(map, node);
     if (i + 1 == route.nodes.size()) {
       steps.push_back({RouteStep::Kind::kDrive, pending, TurnDirection::kStraight, node,
                        fmt::format("Drive {} to {}{}.", FormatDistance(pending), names,
@@ -177,10 +184,11 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
       break;
     }
     const Eigen::Vector2d before = direction_before(i), after = direction_after(i);
-    const double angle = before.norm() > 1e-9 && after.norm() > 1e-9
-                             ? std::atan2(before.x() * after.y() - before.y() * after.x(), before.dot(after)) * 180.0 /
-                                   std::numbers::pi
-                             : 0.0;
+    const double angle =
+        before.norm() > 1e-9 && after.norm() > 1e-9
+            ? std::atan2(before.x() * after.y() - before.y() * after.x(), before.dot(after)) * 180.0 /
+                  std::numbers::pi
+            : 0.0;
     const TurnDirection turn = ClassifyTurn(angle, map.options.straight_below_deg);
     if (turn == TurnDirection::kStraight && names.empty()) continue;  // keep driving
     steps.push_back({RouteStep::Kind::kDrive, pending, TurnDirection::kStraight, node,
@@ -197,7 +205,8 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
   RouteStep arrive;
   arrive.kind = RouteStep::Kind::kArrive;
   arrive.node = last;
-  arrive.text = fmt::format("You have arrived at {} ({} in all).", endpoint_name(route.to_landmark, last), FormatDistance(route.length_m));
+  arrive.text = fmt::format("You have arrived at {} ({} in all).", endpoint_name(route.to_landmark, last),
+                            FormatDistance(route.length_m));
   steps.push_back(arrive);
   for (RouteStep& step : steps) step.text = Capitalized(step.text);
   return steps;
@@ -213,8 +222,9 @@ Route FindRoute(const TopologicalMap& map, std::string_view from_name, std::stri
                                         known.empty() ? std::string("no landmarks") : known));
     }
     if (map.landmarks[static_cast<size_t>(*index)].node < 0) {
-      throw InvalidArgument(fmt::format("landmark '{}' is {} from the driven trajectory: it has no node to route to",
-                                        name, FormatDistance(map.landmarks[static_cast<size_t>(*index)].distance_m)));
+      throw InvalidArgument(
+          fmt::format("landmark '{}' is {} from the driven trajectory: it has no node to route to", name,
+                      FormatDistance(map.landmarks[static_cast<size_t>(*index)].distance_m)));
     }
     return *index;
   };
@@ -222,8 +232,8 @@ Route FindRoute(const TopologicalMap& map, std::string_view from_name, std::stri
   Route route = ShortestPath(map, map.landmarks[static_cast<size_t>(from)].node,
                              map.landmarks[static_cast<size_t>(to)].node);
   if (route.nodes.empty()) {
-    throw std::runtime_error(fmt::format("no route from '{}' to '{}': they are not connected in the topological map",
-                                         from_name, to_name));
+    throw std::runtime_error(fmt::format(
+        "no route from '{}' to '{}': they are not connected in the topological map", from_name, to_name));
   }
   route.from_landmark = from;
   route.to_landmark = to;

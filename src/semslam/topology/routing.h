@@ -14,9 +14,9 @@ namespace semslam {
 struct RouteStep {
   enum class Kind { kStart, kDrive, kTurn, kArrive };
   Kind kind = Kind::kDrive;
-  double distance_m = 0.0;  // kDrive
+  double distance_m = 0.0;                        // kDrive
   TurnDirection turn = TurnDirection::kStraight;  // kTurn
-  int node = -1;            // where the step ends
+  int node = -1;                                  // where the step ends
   std::string text;
 };
 
@@ -25,7 +25,7 @@ struct Route {
   std::vector<int> nodes;  // node ids, start to end
   std::vector<int> edges;  // edge ids, one fewer than nodes
   double length_m = 0.0;
-  Points3d polyline_enu;   // the whole route, oriented
+  Points3d polyline_enu;  // the whole route, oriented
   std::vector<RouteStep> steps;
 };
 

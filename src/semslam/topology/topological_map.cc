@@ -1,9 +1,8 @@
 #include "semslam/topology/topological_map.h"
 
+#include <algorithm>
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/connected_components.hpp>
-
-#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -36,7 +35,8 @@ class Path {
   Eigen::Vector3d At(double s) const {
     if (points_.size() == 1 || s <= 0) return points_.front();
     if (s >= length()) return points_.back();
-    const size_t i = static_cast<size_t>(std::upper_bound(arc_.begin(), arc_.end(), s) - arc_.begin());  // >= 1
+    const size_t i =
+        static_cast<size_t>(std::upper_bound(arc_.begin(), arc_.end(), s) - arc_.begin());  // >= 1
     const double span = arc_[i] - arc_[i - 1];
     const double t = span > 0 ? (s - arc_[i - 1]) / span : 0.0;
     return points_[i - 1] + t * (points_[i] - points_[i - 1]);
@@ -99,8 +99,8 @@ std::vector<Pass> FindPasses(const Points3d& points, const Path& path, const Eig
     consider(path.arc()[k], (p - a).norm(), static_cast<int>(k));
     consider(arc, distance, keyframe);
   }
-  if (!points.empty()) consider(path.length(), (points.back().head<2>() - a).norm(),
-                                static_cast<int>(points.size() - 1));
+  if (!points.empty())
+    consider(path.length(), (points.back().head<2>() - a).norm(), static_cast<int>(points.size() - 1));
   if (current) passes.push_back(*current);
   return passes;
 }
@@ -130,10 +130,12 @@ TurnDirection ClassifyTurn(double signed_angle_deg, double straight_below_deg) {
 
 void TopologyOptions::Check() const {
   Require(std::isfinite(turn_window_m) && turn_window_m > 0, "topology turn_window_m must be positive");
-  Require(turn_threshold_deg > 0 && turn_threshold_deg < 180, "topology turn_threshold_deg must be in (0, 180)");
+  Require(turn_threshold_deg > 0 && turn_threshold_deg < 180,
+          "topology turn_threshold_deg must be in (0, 180)");
   Require(std::isfinite(fuse_distance_m) && fuse_distance_m > 0, "topology fuse_distance_m must be positive");
   Require(landmark_max_distance_m > 0, "topology landmark_max_distance_m must be positive");
-  Require(straight_below_deg > 0 && straight_below_deg < 150, "topology straight_below_deg must be in (0, 150)");
+  Require(straight_below_deg > 0 && straight_below_deg < 150,
+          "topology straight_below_deg must be in (0, 150)");
 }
 
 std::optional<int> TopologicalMap::FindLandmark(std::string_view name) const {
@@ -158,27 +160,32 @@ std::vector<std::string> TopologicalMap::LandmarkNames() const {
 }
 
 int TopologicalMap::NumLandmarkNodes() const {
-  return static_cast<int>(std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.is_landmark; }));
+  return static_cast<int>(
+      std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.is_landmark; }));
 }
 
 int TopologicalMap::NumTurnNodes() const {
-  return static_cast<int>(std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.is_turn; }));
+  return static_cast<int>(
+      std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.is_turn; }));
 }
 
 int TopologicalMap::NumRevisitedNodes() const {
-  return static_cast<int>(std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.passes() > 1; }));
+  return static_cast<int>(
+      std::count_if(nodes.begin(), nodes.end(), [](const TopoNode& n) { return n.passes() > 1; }));
 }
 
 int TopologicalMap::CyclomaticNumber() const {
   if (nodes.empty()) return 0;
   boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS> graph(nodes.size());
-  for (const TopoEdge& e : edges) boost::add_edge(static_cast<size_t>(e.from), static_cast<size_t>(e.to), graph);
+  for (const TopoEdge& e : edges)
+    boost::add_edge(static_cast<size_t>(e.from), static_cast<size_t>(e.to), graph);
   std::vector<int> component(nodes.size());
   const int components = boost::connected_components(graph, component.data());
   return static_cast<int>(edges.size()) - static_cast<int>(nodes.size()) + components;
 }
 
-TopologicalMap BuildTopologicalMap(const FramePositions& keyframes, const std::vector<PlacedLandmark>& landmarks,
+TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
+                                   const std::vector<PlacedLandmark>& landmarks,
                                    const Georeference& georeference, const TopologyOptions& options) {
   options.Check();
   TopologicalMap map(georeference);
@@ -218,7 +225,8 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes, const std::v
     const double sign = change[k] > 0 ? 1.0 : -1.0;
     size_t peak = k;
     size_t end = k;
-    while (end < change.size() && std::abs(change[end]) > options.turn_threshold_deg && change[end] * sign > 0) {
+    while (end < change.size() && std::abs(change[end]) > options.turn_threshold_deg &&
+           change[end] * sign > 0) {
       if (std::abs(change[end]) > std::abs(change[peak])) peak = end;
       ++end;
     }
@@ -253,7 +261,8 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes, const std::v
     l.name = placed.landmark.name;
     l.category = placed.landmark.category;
     l.wgs84 = placed.landmark.position;
-    if (!placed.landmark.has_altitude) l.wgs84.altitude_m = georeference.enu_frame.ToWgs84(placed.enu).altitude_m;
+    if (!placed.landmark.has_altitude)
+      l.wgs84.altitude_m = georeference.enu_frame.ToWgs84(placed.enu).altitude_m;
     l.enu = placed.enu;
     l.map_position = placed.map_position;
     int nearest = -1;
@@ -276,26 +285,27 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes, const std::v
     }
     map.landmarks.push_back(std::move(l));
   }
-  std::vector<double> turn_sum(map.nodes.size(), 0.0);
-  std::vector<int> left_count, right_count;
+  // Per node: the sums of its left, right and u-turn angles.
+  std::vector<Eigen::Vector3d> angle_sums;
   for (const TurnEvent& t : turns) {
     int node = nearest_node(points[static_cast<size_t>(t.keyframe)]);
     if (node < 0) node = new_node(t.keyframe).id;
     TopoNode& n = map.nodes[static_cast<size_t>(node)];
     n.is_turn = true;
     ++n.turn_events;
-    turn_sum.resize(map.nodes.size(), 0.0);
-    left_count.resize(map.nodes.size(), 0);
-    right_count.resize(map.nodes.size(), 0);
-    turn_sum[static_cast<size_t>(node)] += t.angle;
-    (t.angle > 0 ? left_count : right_count)[static_cast<size_t>(node)]++;
+    angle_sums.resize(map.nodes.size(), Eigen::Vector3d::Zero());
+    const TurnDirection direction = ClassifyTurn(t.angle, 0.0);
+    const int kind = direction == TurnDirection::kUTurn ? 2 : direction == TurnDirection::kLeft ? 0 : 1;
+    (kind == 0 ? n.left_turns : kind == 1 ? n.right_turns : n.u_turns)++;
+    angle_sums[static_cast<size_t>(node)][kind] += t.angle;
   }
   for (TopoNode& n : map.nodes) {
     const size_t i = static_cast<size_t>(n.id);
     if (n.is_turn) {
-      n.turn_angle_deg = turn_sum[i] / n.turn_events;
-      n.turn = left_count[i] >= right_count[i] ? TurnDirection::kLeft : TurnDirection::kRight;
-      if (std::abs(n.turn_angle_deg) > 150.0) n.turn = TurnDirection::kUTurn;
+      const int most = std::max({n.left_turns, n.right_turns, n.u_turns});
+      const int kind = n.left_turns == most ? 0 : n.right_turns == most ? 1 : 2;
+      n.turn = kind == 0 ? TurnDirection::kLeft : kind == 1 ? TurnDirection::kRight : TurnDirection::kUTurn;
+      n.turn_angle_deg = angle_sums[i][kind] / most;
     }
     n.map_position = georeference.EnuToMap(n.enu);
     n.wgs84 = georeference.enu_frame.ToWgs84(n.enu);

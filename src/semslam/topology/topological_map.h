@@ -49,13 +49,16 @@ struct TopoNode {
   Eigen::Vector3d enu = Eigen::Vector3d::Zero();  // on the trajectory
   Eigen::Vector3d map_position = Eigen::Vector3d::Zero();
   Wgs84 wgs84;
-  std::vector<int> landmarks;       // indices into TopologicalMap::landmarks
+  std::vector<int> landmarks;                     // indices into TopologicalMap::landmarks
   TurnDirection turn = TurnDirection::kStraight;  // of the turn events here (majority), when is_turn
-  double turn_angle_deg = 0.0;      // mean signed heading change of the turn events (+ left)
-  int turn_events = 0;              // turn events fused here
-  int anchor_keyframe = -1;         // index into TopologicalMap::keyframes
-  std::vector<int> visit_keyframes; // nearest keyframe of each pass, in trajectory order
-  std::vector<double> visit_arc_m;  // arc length along the trajectory of each pass's closest point
+  double turn_angle_deg = 0.0;  // mean signed heading change of the events of `turn` (+ left)
+  int turn_events = 0;          // turn events fused here
+  // Of them: left, right, and turning around (|heading change| > 150 deg); a crossroads may be turned
+  // different ways on different passes. `turn` is the most frequent (ties: left, right, u-turn).
+  int left_turns = 0, right_turns = 0, u_turns = 0;
+  int anchor_keyframe = -1;          // index into TopologicalMap::keyframes
+  std::vector<int> visit_keyframes;  // nearest keyframe of each pass, in trajectory order
+  std::vector<double> visit_arc_m;   // arc length along the trajectory of each pass's closest point
 
   int passes() const { return static_cast<int>(visit_arc_m.size()); }
 };
@@ -74,7 +77,7 @@ struct TopoLandmark {
   Wgs84 wgs84;
   Eigen::Vector3d enu = Eigen::Vector3d::Zero();
   Eigen::Vector3d map_position = Eigen::Vector3d::Zero();
-  int node = -1;  // -1: too far from the trajectory for a node
+  int node = -1;            // -1: too far from the trajectory for a node
   double distance_m = 0.0;  // to the trajectory (its nearest keyframe), horizontal
 };
 
@@ -107,7 +110,8 @@ struct TopologicalMap {
 };
 
 // `keyframes` in trajectory order; `landmarks` from PlaceLandmarks with the same georeference.
-TopologicalMap BuildTopologicalMap(const FramePositions& keyframes, const std::vector<PlacedLandmark>& landmarks,
+TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
+                                   const std::vector<PlacedLandmark>& landmarks,
                                    const Georeference& georeference, const TopologyOptions& options = {});
 
 // ---- Output and input (topology_io.cc) ----
@@ -122,6 +126,10 @@ void WriteTopologyDot(const std::filesystem::path& path, const TopologicalMap& m
 void WriteTopologyJson(const std::filesystem::path& path, const TopologicalMap& map);
 // Throws InputError naming the file and field on a malformed file.
 TopologicalMap ReadTopologyJson(const std::filesystem::path& path);
+// The same JSON as a string (for the map file's extra section "topology"), and its parser; `source` names
+// where the text came from in error messages (e.g. "map.semslam#topology").
+std::string TopologyJsonString(const TopologicalMap& map);
+TopologicalMap ParseTopologyJson(const std::string& text, const std::filesystem::path& source);
 // All four next to each other: DIR/topology.{geojson,graphml,dot,json}.
 void WriteTopologyFiles(const std::filesystem::path& directory, const TopologicalMap& map);
 

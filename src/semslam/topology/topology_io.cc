@@ -1,16 +1,15 @@
 // Topological map files: GeoJSON, GraphML and DOT (Boost.Graph writers), the full-fidelity topology.json and
 // its reader, and route GeoJSON. nlohmann_json stays in this file.
 
+#include <fmt/format.h>
+
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/graphml.hpp>
 #include <boost/graph/graphviz.hpp>
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
-
-#include <fmt/format.h>
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
@@ -39,7 +38,8 @@ std::string NodeKind(const TopoNode& n) {
 
 std::string NodeNames(const TopologicalMap& map, const TopoNode& n) {
   std::string names;
-  for (const int l : n.landmarks) names += (names.empty() ? "" : " / ") + map.landmarks[static_cast<size_t>(l)].name;
+  for (const int l : n.landmarks)
+    names += (names.empty() ? "" : " / ") + map.landmarks[static_cast<size_t>(l)].name;
   return names;
 }
 
@@ -124,7 +124,7 @@ TurnDirection TurnFromName(const std::string& name, const JsonReader& r, const s
 
 }  // namespace
 
-void WriteTopologyJson(const fs::path& path, const TopologicalMap& map) {
+std::string TopologyJsonString(const TopologicalMap& map) {
   const Sim3d& t = map.georeference.enu_from_map;
   const Wgs84& origin = map.georeference.enu_frame.origin();
   json root;
@@ -140,7 +140,8 @@ void WriteTopologyJson(const fs::path& path, const TopologicalMap& map) {
   root["options"] = {{"turn_window_m", o.turn_window_m},
                      {"turn_threshold_deg", o.turn_threshold_deg},
                      {"fuse_distance_m", o.fuse_distance_m},
-                     {"landmark_max_distance_m", std::isfinite(o.landmark_max_distance_m) ? o.landmark_max_distance_m : 1e300},
+                     {"landmark_max_distance_m",
+                      std::isfinite(o.landmark_max_distance_m) ? o.landmark_max_distance_m : 1e300},
                      {"straight_below_deg", o.straight_below_deg}};
   json landmarks = json::array();
   for (const TopoLandmark& l : map.landmarks) {
@@ -170,6 +171,9 @@ void WriteTopologyJson(const fs::path& path, const TopologicalMap& map) {
                      {"turn", TurnDirectionName(n.turn)},
                      {"turn_angle_deg", n.turn_angle_deg},
                      {"turn_events", n.turn_events},
+                     {"left_turns", n.left_turns},
+                     {"right_turns", n.right_turns},
+                     {"u_turns", n.u_turns},
                      {"anchor_keyframe", n.anchor_keyframe},
                      {"visit_keyframes", n.visit_keyframes},
                      {"visit_arc_m", n.visit_arc_m}});
@@ -198,7 +202,11 @@ void WriteTopologyJson(const fs::path& path, const TopologicalMap& map) {
                          {"heading_change_deg", k.heading_change_deg}});
   }
   root["keyframes"] = keyframes;
-  WriteFileAtomically(path, root.dump(1) + "\n");
+  return root.dump(1) + "\n";
+}
+
+void WriteTopologyJson(const fs::path& path, const TopologicalMap& map) {
+  WriteFileAtomically(path, TopologyJsonString(map));
 }
 
 TopologicalMap ReadTopologyJson(const fs::path& path) {
@@ -206,13 +214,17 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
   if (!stream) throw InputError(path, "cannot open the topology file");
   std::stringstream buffer;
   buffer << stream.rdbuf();
-  const std::string text = buffer.str();
+  return ParseTopologyJson(buffer.str(), path);
+}
+
+TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) {
   json root;
   try {
     root = json::parse(text);
   } catch (const json::parse_error& e) {
     const size_t byte = std::min<size_t>(e.byte, text.size());
-    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
+    const int line = 1 + static_cast<int>(std::count(text.begin(),
+                                                     text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
     throw InputError(SourceLocation{path, line}, "json", e.what());
   }
   const JsonReader r(path);
@@ -224,7 +236,8 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
 
   const json& geo = r.Member(root, "georeference", "");
   const json& origin_json = r.Member(geo, "origin", "georeference");
-  const Wgs84 origin{r.Number(origin_json, "lat", "georeference.origin"), r.Number(origin_json, "lon", "georeference.origin"),
+  const Wgs84 origin{r.Number(origin_json, "lat", "georeference.origin"),
+                     r.Number(origin_json, "lon", "georeference.origin"),
                      r.Number(origin_json, "alt", "georeference.origin")};
   if (!origin.IsValid()) r.Fail("georeference.origin", "not a valid WGS84 position");
   const json& t = r.Member(geo, "enu_from_map", "georeference");
@@ -233,12 +246,15 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
   const json& q = r.Array(t, "rotation_wxyz", "georeference.enu_from_map");
   if (q.size() != 4) r.Fail("georeference.enu_from_map.rotation_wxyz", "expected 4 numbers");
   for (size_t i = 0; i < 4; ++i) {
-    if (!q[i].is_number()) r.Fail(fmt::format("georeference.enu_from_map.rotation_wxyz[{}]", i), "expected a number");
+    if (!q[i].is_number())
+      r.Fail(fmt::format("georeference.enu_from_map.rotation_wxyz[{}]", i), "expected a number");
   }
-  const Eigen::Quaterniond rotation(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>());
-  if (!(rotation.norm() > 0.5)) r.Fail("georeference.enu_from_map.rotation_wxyz", "not a rotation quaternion");
-  TopologicalMap map(Georeference(EnuFrame(origin), Sim3d(scale, rotation, r.Vector(t, "translation",
-                                                                                     "georeference.enu_from_map"))));
+  const Eigen::Quaterniond rotation(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(),
+                                    q[3].get<double>());
+  if (!(rotation.norm() > 0.5))
+    r.Fail("georeference.enu_from_map.rotation_wxyz", "not a rotation quaternion");
+  TopologicalMap map(Georeference(
+      EnuFrame(origin), Sim3d(scale, rotation, r.Vector(t, "translation", "georeference.enu_from_map"))));
 
   const json& o = r.Member(root, "options", "");
   map.options.turn_window_m = r.Number(o, "turn_window_m", "options");
@@ -257,7 +273,8 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
   const json& edges = r.Array(root, "edges", "");
   const json& keyframes = r.Array(root, "keyframes", "");
   const auto check_index = [&](long long value, size_t size, const std::string& field, bool allow_none) {
-    if ((allow_none && value == -1) || (value >= 0 && static_cast<size_t>(value) < size)) return static_cast<int>(value);
+    if ((allow_none && value == -1) || (value >= 0 && static_cast<size_t>(value) < size))
+      return static_cast<int>(value);
     r.Fail(field, fmt::format("index {} out of range (0..{})", value, static_cast<long long>(size) - 1));
   };
 
@@ -281,7 +298,8 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
     const json& j = nodes[i];
     TopoNode n;
     n.id = static_cast<int>(r.Integer(j, "id", p));
-    if (n.id != static_cast<int>(i)) r.Fail(p + ".id", fmt::format("expected {} (nodes are numbered in order)", i));
+    if (n.id != static_cast<int>(i))
+      r.Fail(p + ".id", fmt::format("expected {} (nodes are numbered in order)", i));
     n.is_landmark = r.Bool(j, "is_landmark", p);
     n.is_turn = r.Bool(j, "is_turn", p);
     n.enu = r.Vector(j, "enu", p);
@@ -290,20 +308,29 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
     const json& ls = r.Array(j, "landmarks", p);
     for (size_t k = 0; k < ls.size(); ++k) {
       if (!ls[k].is_number_integer()) r.Fail(fmt::format("{}.landmarks[{}]", p, k), "expected an integer");
-      n.landmarks.push_back(
-          check_index(ls[k].get<long long>(), map.landmarks.size(), fmt::format("{}.landmarks[{}]", p, k), false));
+      n.landmarks.push_back(check_index(ls[k].get<long long>(), map.landmarks.size(),
+                                        fmt::format("{}.landmarks[{}]", p, k), false));
     }
     n.turn = TurnFromName(r.String(j, "turn", p), r, p + ".turn");
     n.turn_angle_deg = r.Number(j, "turn_angle_deg", p);
     n.turn_events = static_cast<int>(r.Integer(j, "turn_events", p));
-    n.anchor_keyframe = check_index(r.Integer(j, "anchor_keyframe", p), keyframes.size(), p + ".anchor_keyframe", true);
+    n.left_turns = static_cast<int>(r.Integer(j, "left_turns", p));
+    n.right_turns = static_cast<int>(r.Integer(j, "right_turns", p));
+    n.u_turns = static_cast<int>(r.Integer(j, "u_turns", p));
+    if (n.left_turns < 0 || n.right_turns < 0 || n.u_turns < 0 ||
+        n.left_turns + n.right_turns + n.u_turns != n.turn_events) {
+      r.Fail(p + ".turn_events", "must be left_turns + right_turns + u_turns");
+    }
+    n.anchor_keyframe =
+        check_index(r.Integer(j, "anchor_keyframe", p), keyframes.size(), p + ".anchor_keyframe", true);
     const json& vk = r.Array(j, "visit_keyframes", p);
     const json& va = r.Array(j, "visit_arc_m", p);
     if (vk.size() != va.size()) r.Fail(p + ".visit_arc_m", "must have as many entries as visit_keyframes");
     for (size_t k = 0; k < vk.size(); ++k) {
-      if (!vk[k].is_number_integer() || !va[k].is_number()) r.Fail(fmt::format("{}.visits[{}]", p, k), "expected numbers");
-      n.visit_keyframes.push_back(
-          check_index(vk[k].get<long long>(), keyframes.size(), fmt::format("{}.visit_keyframes[{}]", p, k), false));
+      if (!vk[k].is_number_integer() || !va[k].is_number())
+        r.Fail(fmt::format("{}.visits[{}]", p, k), "expected numbers");
+      n.visit_keyframes.push_back(check_index(vk[k].get<long long>(), keyframes.size(),
+                                              fmt::format("{}.visit_keyframes[{}]", p, k), false));
       n.visit_arc_m.push_back(va[k].get<double>());
     }
     map.nodes.push_back(std::move(n));
@@ -313,7 +340,8 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
     const json& j = edges[i];
     TopoEdge e;
     e.id = static_cast<int>(r.Integer(j, "id", p));
-    if (e.id != static_cast<int>(i)) r.Fail(p + ".id", fmt::format("expected {} (edges are numbered in order)", i));
+    if (e.id != static_cast<int>(i))
+      r.Fail(p + ".id", fmt::format("expected {} (edges are numbered in order)", i));
     e.from = check_index(r.Integer(j, "from", p), nodes.size(), p + ".from", false);
     e.to = check_index(r.Integer(j, "to", p), nodes.size(), p + ".to", false);
     e.length_m = r.Number(j, "length_m", p);
@@ -321,7 +349,8 @@ TopologicalMap ReadTopologyJson(const fs::path& path) {
     e.traversals = static_cast<int>(r.Integer(j, "traversals", p));
     const json& line = r.Array(j, "polyline_enu", p);
     if (line.size() < 2) r.Fail(p + ".polyline_enu", "needs at least 2 points");
-    for (size_t k = 0; k < line.size(); ++k) e.polyline_enu.push_back(r.Vector(line[k], fmt::format("{}.polyline_enu[{}]", p, k)));
+    for (size_t k = 0; k < line.size(); ++k)
+      e.polyline_enu.push_back(r.Vector(line[k], fmt::format("{}.polyline_enu[{}]", p, k)));
     map.edges.push_back(std::move(e));
   }
   for (size_t i = 0; i < keyframes.size(); ++i) {
@@ -348,7 +377,7 @@ void WriteTopologyGeoJson(const fs::path& path, const TopologicalMap& map) {
   for (const TopoNode& n : map.nodes) {
     json names = json::array();
     for (const int l : n.landmarks) names.push_back(map.landmarks[static_cast<size_t>(l)].name);
-    json properties = {{"feature", "node"}, {"id", n.id},          {"kind", NodeKind(n)},
+    json properties = {{"feature", "node"},  {"id", n.id},           {"kind", NodeKind(n)},
                        {"landmarks", names}, {"passes", n.passes()}, {"label", NodeLabel(map, n)}};
     if (n.is_turn) {
       properties["turn"] = TurnDirectionName(n.turn);
@@ -490,9 +519,11 @@ void WriteRouteGeoJson(const fs::path& path, const TopologicalMap& map, const Ro
                         {"steps", steps}}}});
   for (size_t i = 0; i < route.nodes.size(); ++i) {
     const TopoNode& n = map.nodes[static_cast<size_t>(route.nodes[i])];
-    features.push_back({{"type", "Feature"},
-                        {"geometry", {{"type", "Point"}, {"coordinates", LonLatAlt(n.wgs84)}}},
-                        {"properties", {{"feature", "route_node"}, {"order", i}, {"id", n.id}, {"label", NodeLabel(map, n)}}}});
+    features.push_back(
+        {{"type", "Feature"},
+         {"geometry", {{"type", "Point"}, {"coordinates", LonLatAlt(n.wgs84)}}},
+         {"properties",
+          {{"feature", "route_node"}, {"order", i}, {"id", n.id}, {"label", NodeLabel(map, n)}}}});
   }
   WriteFileAtomically(path, json({{"type", "FeatureCollection"}, {"features", features}}).dump(1) + "\n");
 }

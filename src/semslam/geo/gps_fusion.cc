@@ -1,0 +1,197 @@
+#include "semslam/geo/gps_fusion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "semslam/core/error.h"
+#include "semslam/geometry/alignment.h"
+
+namespace semslam {
+
+void GpsFusionOptions::Check() const {
+  sampling.Check();
+  alignment.Check();
+  Require(std::isfinite(translation_sigma_fraction) && translation_sigma_fraction > 0,
+          "GPS fusion translation_sigma_fraction must be positive");
+  Require(std::isfinite(translation_sigma_floor_m) && translation_sigma_floor_m > 0,
+          "GPS fusion translation_sigma_floor_m must be positive");
+  Require(std::isfinite(rotation_sigma_rad) && rotation_sigma_rad > 0,
+          "GPS fusion rotation_sigma_rad must be positive");
+  Require(std::isfinite(log_scale_sigma) && log_scale_sigma > 0,
+          "GPS fusion log_scale_sigma must be positive");
+  Require(std::isfinite(prior_loss_scale) && prior_loss_scale > 0,
+          "GPS fusion prior_loss_scale must be positive");
+  Require(std::isfinite(outlier_sigma) && outlier_sigma > 0, "GPS fusion outlier_sigma must be positive");
+  Require(max_rounds >= 1, "GPS fusion max_rounds must be >= 1");
+  Require(max_iterations >= 1, "GPS fusion max_iterations must be >= 1");
+}
+
+namespace {
+
+struct GraphEdge {
+  int a = 0, b = 0;
+  Sim3d a_from_b;
+  double weight = 1.0;
+};
+
+Sim3d Relative(const Rigid3d& world_from_a, const Rigid3d& world_from_b) {
+  return Sim3d(world_from_a.Inverse() * world_from_b);
+}
+
+}  // namespace
+
+std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFrame& enu_frame,
+                                       const GpsFusionOptions& options) {
+  options.Check();
+  const std::vector<FramePose>& keyframes = input.keyframes;
+  Require(!keyframes.empty(), "GPS fusion needs keyframes");
+  for (size_t i = 1; i < keyframes.size(); ++i) {
+    Require(keyframes[i].frame_index > keyframes[i - 1].frame_index,
+            "GPS fusion: keyframes must be in strictly increasing frame order");
+  }
+  const int num_keyframes = static_cast<int>(keyframes.size());
+  for (const FusionEdge& e : input.edges) {
+    Require(e.a >= 0 && e.a < num_keyframes && e.b >= 0 && e.b < num_keyframes && e.a != e.b,
+            "GPS fusion: edge between keyframes that do not exist");
+    Require(std::isfinite(e.weight) && e.weight > 0, "GPS fusion: edge weight must be positive");
+  }
+
+  // 1. Samples every N frames, and the robust similarity (the paper's alignment).
+  const std::vector<FramePose>& sampled_frames = input.frames.empty() ? keyframes : input.frames;
+  std::vector<GpsSample> samples =
+      SampleGpsPairs(Positions(sampled_frames), input.fixes, enu_frame, options.sampling);
+  const auto prealignment = AlignMapToGps(samples, options.alignment);
+  if (!prealignment) return std::nullopt;
+
+  // 2. Nodes: keyframes, then sampled frames that are not keyframes.
+  std::vector<FramePose> nodes = keyframes;
+  std::map<size_t, int> node_of_frame;
+  for (int i = 0; i < num_keyframes; ++i) node_of_frame[keyframes[static_cast<size_t>(i)].frame_index] = i;
+  std::map<size_t, const FramePose*> frame_by_index;
+  for (const FramePose& f : sampled_frames) frame_by_index[f.frame_index] = &f;
+  std::vector<int> sample_node(samples.size());
+  std::vector<GraphEdge> edges;
+  const auto keyframe_at_or_before = [&](size_t frame) -> int {
+    const auto it = std::upper_bound(keyframes.begin(), keyframes.end(), frame,
+                                     [](size_t f, const FramePose& k) { return f < k.frame_index; });
+    return static_cast<int>(it - keyframes.begin()) - 1;  // -1: none
+  };
+  for (size_t s = 0; s < samples.size(); ++s) {
+    const size_t frame = samples[s].frame_index;
+    const auto existing = node_of_frame.find(frame);
+    if (existing != node_of_frame.end()) {
+      sample_node[s] = existing->second;
+      continue;
+    }
+    const FramePose& pose = *frame_by_index.at(frame);
+    const int node = static_cast<int>(nodes.size());
+    nodes.push_back(pose);
+    node_of_frame[frame] = node;
+    sample_node[s] = node;
+    const int before = keyframe_at_or_before(frame);
+    const int after = before + 1;
+    if (before >= 0) {
+      edges.push_back(
+          {before, node,
+           Relative(keyframes[static_cast<size_t>(before)].world_from_camera, pose.world_from_camera), 1.0});
+    }
+    if (after < num_keyframes) {
+      edges.push_back(
+          {node, after,
+           Relative(pose.world_from_camera, keyframes[static_cast<size_t>(after)].world_from_camera), 1.0});
+    }
+  }
+
+  // 3. Edges between keyframes: the caller's, and the chain where the caller gave none.
+  std::set<std::pair<int, int>> given;
+  for (const FusionEdge& e : input.edges) {
+    edges.push_back({e.a, e.b, e.a_from_b, e.weight});
+    given.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
+  }
+  if (options.add_chain_edges) {
+    for (int i = 1; i < num_keyframes; ++i) {
+      if (given.count({i - 1, i}) > 0) continue;
+      edges.push_back({i - 1, i,
+                       Relative(keyframes[static_cast<size_t>(i - 1)].world_from_camera,
+                                keyframes[static_cast<size_t>(i)].world_from_camera),
+                       1.0});
+    }
+  }
+
+  // 4. Solve; drop fixes far from the fused trajectory; solve again until the set settles.
+  const Sim3d& enu_from_map = prealignment->enu_from_map;
+  const double units_per_metre = 1.0 / enu_from_map.scale;
+  const bool fix_scale = !options.alignment.estimate_scale;
+  std::vector<bool> active = prealignment->inliers;
+  GpsFusionResult result{
+      Georeference(enu_frame, enu_from_map), *prealignment, samples, {}, {}, 0, 0.0, {}, 0, {}};
+  std::vector<Sim3d> fused(nodes.size());
+  for (int round = 0; round < options.max_rounds; ++round) {
+    PoseGraph graph;
+    for (const FramePose& n : nodes) graph.AddNode(enu_from_map * Sim3d(n.world_from_camera), false);
+    for (const GraphEdge& e : edges) {
+      const double sigma_t = std::max(options.translation_sigma_fraction * e.a_from_b.translation.norm(),
+                                      options.translation_sigma_floor_m * units_per_metre);
+      graph.AddRelativeEdge(e.a, e.b, e.a_from_b,
+                            e.weight * PoseGraph::EdgeInformation(sigma_t, options.rotation_sigma_rad,
+                                                                  options.log_scale_sigma));
+    }
+    for (size_t s = 0; s < samples.size(); ++s) {
+      if (active[s]) graph.AddPositionPrior(sample_node[s], samples[s].enu, samples[s].sigma_m, true);
+    }
+    PoseGraphOptions graph_options;
+    graph_options.fix_scale = fix_scale;
+    graph_options.max_iterations = options.max_iterations;
+    graph_options.prior_loss = RobustLoss::kCauchy;
+    graph_options.prior_loss_scale = options.prior_loss_scale;
+    result.summary = graph.Optimize(graph_options);
+    result.rounds = round + 1;
+    for (size_t i = 0; i < nodes.size(); ++i) fused[i] = graph.world_from_node(static_cast<int>(i));
+
+    std::vector<bool> next(samples.size());
+    result.residuals_m.assign(samples.size(), 0.0);
+    for (size_t s = 0; s < samples.size(); ++s) {
+      result.residuals_m[s] =
+          (fused[static_cast<size_t>(sample_node[s])].translation - samples[s].enu).norm();
+      next[s] = result.residuals_m[s] <= options.outlier_sigma * samples[s].sigma_m;
+    }
+    // Done when the kept fixes settle, at the last round, or when too few would be left.
+    if (next == active || round + 1 == options.max_rounds ||
+        std::count(next.begin(), next.end(), true) < options.alignment.min_samples) {
+      break;
+    }
+    active = std::move(next);
+  }
+  result.inliers = active;
+  double sum = 0.0;
+  for (size_t s = 0; s < samples.size(); ++s) {
+    if (!active[s]) continue;
+    ++result.num_inliers;
+    sum += result.residuals_m[s] * result.residuals_m[s];
+  }
+  if (result.num_inliers > 0) result.inlier_rmse_m = std::sqrt(sum / result.num_inliers);
+
+  // 5. Outputs: fused keyframe poses, per-node corrections and the global fit.
+  result.keyframe_enu_from_camera.assign(fused.begin(), fused.begin() + num_keyframes);
+  std::vector<LocalCorrections::Keyframe> corrections;
+  Points3d map_positions, enu_positions;
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const Sim3d correction = fused[i] * Sim3d(nodes[i].world_from_camera).Inverse();
+    corrections.push_back({nodes[i].frame_index, nodes[i].world_from_camera.translation, correction});
+    map_positions.push_back(nodes[i].world_from_camera.translation);
+    enu_positions.push_back(fused[i].translation);
+  }
+  std::optional<Sim3d> global;
+  if (fix_scale) {
+    if (const auto rigid = AlignRigid3(map_positions, enu_positions)) global = Sim3d(*rigid);
+  } else {
+    global = AlignSim3(map_positions, enu_positions);
+  }
+  result.georeference = Georeference(enu_frame, global.value_or(enu_from_map),
+                                     std::make_shared<const LocalCorrections>(std::move(corrections)));
+  return result;
+}
+
+}  // namespace semslam

@@ -1,0 +1,82 @@
+#pragma once
+// GPS fixes as robust constraints in a pose graph (beyond the paper's single similarity, §III-C): the
+// keyframe chain of a (monocular, scale-drifting) map is pre-aligned to ENU with the robust Sim(3) of the
+// sampled (GPS, frame) pairs, then optimized as a Sim(3) pose graph (SE(3) for stereo) whose relative edges
+// keep the map's local shape and whose position priors pull the sampled frames to their fixes under a Cauchy
+// loss, so that scale drift is corrected along the trajectory and outlier fixes lose their pull. Fixes still
+// off by more than `outlier_sigma` sigmas after a solve are dropped and the graph solved again.
+//
+// Nodes: every keyframe, plus every sampled frame that is not a keyframe (tied to the keyframes before and
+// after it by the relative poses of the map). Edges: consecutive keyframes (from their poses, unless the
+// caller gives an edge between them) and the caller's covisibility and loop edges (measured relative
+// similarities, e.g. a loop's Sim(3)).
+
+#include <optional>
+#include <vector>
+
+#include "semslam/geo/frame_position.h"
+#include "semslam/geo/georeference.h"
+#include "semslam/geo/gps.h"
+#include "semslam/geo/gps_alignment.h"
+#include "semslam/optim/pose_graph.h"
+
+namespace semslam {
+
+enum class FusionEdgeKind { kSequential, kCovisibility, kLoop };
+
+// A relative constraint between keyframes a and b (indices into GpsFusionInput::keyframes):
+// a_from_b = world_from_a^-1 * world_from_b as measured (map units; a loop's similarity may carry a scale).
+struct FusionEdge {
+  int a = 0, b = 0;
+  Sim3d a_from_b;
+  FusionEdgeKind kind = FusionEdgeKind::kCovisibility;
+  double weight = 1.0;  // multiplies the edge's information (the sigmas below)
+};
+
+struct GpsFusionInput {
+  std::vector<FramePose> keyframes;  // strictly increasing frame_index
+  // Every tracked frame, for sampling every N frames as the paper does; empty: keyframes are sampled.
+  std::vector<FramePose> frames;
+  std::vector<FusionEdge> edges;
+  std::vector<GpsFix> fixes;  // time-ordered (GpsLog::fixes)
+};
+
+struct GpsFusionOptions {
+  GpsSamplingOptions sampling;
+  GpsAlignmentOptions alignment;  // alignment.estimate_scale: Sim(3) nodes (monocular); false: SE(3) (stereo)
+  // Edge precision: translation sigma = max(translation_sigma_fraction * |t_ab|, translation_sigma_floor_m),
+  // rotation sigma per edge, log-scale sigma per edge (how fast monocular scale may drift).
+  double translation_sigma_fraction = 0.01;
+  double translation_sigma_floor_m = 0.02;
+  double rotation_sigma_rad = 0.002;
+  double log_scale_sigma = 0.002;
+  double prior_loss_scale = 2.0;  // Cauchy scale, in sigmas of the fix
+  double outlier_sigma = 5.0;     // a fix farther than this many sigmas from its fused frame is dropped
+  int max_rounds = 3;
+  int max_iterations = 50;
+  bool add_chain_edges = true;
+
+  void Check() const;  // throws InvalidArgument
+};
+
+struct GpsFusionResult {
+  // Global similarity (the best fit of the map's node positions onto their fused ENU positions) with the
+  // per-node corrections (LocalCorrections) that carry the fusion to every map point and frame.
+  Georeference georeference;
+  GpsAlignment prealignment;  // the robust Sim(3) of the samples (the paper's method, made robust)
+  std::vector<GpsSample> samples;
+  std::vector<double> residuals_m;  // |fused frame position - fix| per sample
+  std::vector<bool> inliers;        // fixes kept in the final solve
+  int num_inliers = 0;
+  double inlier_rmse_m = 0.0;
+  std::vector<Sim3d> keyframe_enu_from_camera;  // fused keyframe poses (scale: metres per camera unit)
+  int rounds = 0;
+  PoseGraphSummary summary;  // of the last solve
+};
+
+// nullopt when the samples do not determine an alignment (too few, or all on one line). Throws
+// InvalidArgument on bad options or inputs (unsorted keyframes, edge indices out of range).
+std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFrame& enu_frame,
+                                       const GpsFusionOptions& options = {});
+
+}  // namespace semslam

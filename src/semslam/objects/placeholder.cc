@@ -1,1 +1,0 @@
-// Placeholder until the objects module has sources.

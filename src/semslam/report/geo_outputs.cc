@@ -1,0 +1,333 @@
+#include "semslam/report/geo_outputs.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/geo/georeference_json.h"
+#include "semslam/semantics/class_table.h"
+
+namespace semslam {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+void GeoOptions::Check() const {
+  gps_read.Check();
+  fusion.Check();
+  Require(!time_offset_s || std::isfinite(*time_offset_s), "geo time_offset_s must be finite");
+  landmarks.Check();
+  Require(std::isfinite(osm_radius_m) && osm_radius_m > 0, "geo osm_radius_m must be positive");
+  topology.Check();
+  objects.Check();
+  plots.Check();
+  Require(std::isfinite(raster_cell_m) && raster_cell_m > 0, "geo raster_cell_m must be positive");
+}
+
+std::string GeoSummary::ToJson() const {
+  json j = {{"georeferenced", georeferenced},
+            {"fused", fused},
+            {"gps_format", gps_format},
+            {"gps_fixes", gps_fixes},
+            {"gps_skipped", gps_skipped},
+            {"gps_samples", gps_samples},
+            {"gps_inliers", gps_inliers},
+            {"time_offset_s", time_offset_s},
+            {"metres_per_map_unit", metres_per_map_unit},
+            {"single_sim3_rmse_m", single_sim3_rmse_m},
+            {"fused_rmse_m", fused_rmse_m},
+            {"landmarks", landmarks},
+            {"landmarks_associated", landmarks_associated},
+            {"topology_nodes", topology_nodes},
+            {"topology_landmark_nodes", topology_landmark_nodes},
+            {"topology_turn_nodes", topology_turn_nodes},
+            {"topology_edges", topology_edges},
+            {"topology_revisited_nodes", topology_revisited_nodes},
+            {"objects", objects},
+            {"objects_per_class", objects_per_class},
+            {"trajectory_frames", trajectory_frames}};
+  return j.dump();
+}
+
+namespace {
+
+void CheckInputs(const GeoInputs& inputs) {
+  const auto check_order = [](const std::vector<FramePose>& poses, const char* what) {
+    for (size_t i = 1; i < poses.size(); ++i) {
+      Require(poses[i].frame_index > poses[i - 1].frame_index,
+              fmt::format("geo outputs: {} must be in strictly increasing frame order", what));
+    }
+    for (const FramePose& p : poses) {
+      Require(
+          p.world_from_camera.translation.allFinite() && p.world_from_camera.rotation.coeffs().allFinite(),
+          fmt::format("geo outputs: {} pose is not finite", what));
+    }
+  };
+  check_order(inputs.frames, "frames");
+  check_order(inputs.keyframes, "keyframes");
+}
+
+// The frames of the trajectory output: every tracked frame, or the keyframes when no frames are given.
+const std::vector<FramePose>& TrajectoryFrames(const GeoInputs& inputs) {
+  return inputs.frames.empty() ? inputs.keyframes : inputs.frames;
+}
+
+void WriteTrajectoryWgs84(const fs::path& path, const std::vector<FramePose>& frames, const Georeference& g) {
+  std::string text = "t,lat,lon,alt\n";
+  for (const FramePose& f : frames) {
+    const Wgs84 w = g.enu_frame.ToWgs84(g.FrameToEnu(f.frame_index, f.world_from_camera.translation));
+    text += fmt::format("{:.6f},{:.9f},{:.9f},{:.3f}\n", f.timestamp, w.latitude_deg, w.longitude_deg,
+                        w.altitude_m);
+  }
+  WriteFileAtomically(path, text);
+}
+
+Points3d TrajectoryEnu(const std::vector<FramePose>& frames, const Georeference& g) {
+  Points3d out;
+  out.reserve(frames.size());
+  for (const FramePose& f : frames)
+    out.push_back(g.FrameToEnu(f.frame_index, f.world_from_camera.translation));
+  return out;
+}
+
+PlotOptions Titled(PlotOptions options, std::string title) {
+  if (options.title.empty()) options.title = std::move(title);
+  return options;
+}
+
+}  // namespace
+
+GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, const GeoOptions& options) {
+  options.Check();
+  CheckInputs(inputs);
+  fs::create_directories(out_dir);
+  GeoOutputs out;
+  GeoSummary& summary = out.summary;
+  const std::vector<FramePose>& trajectory = TrajectoryFrames(inputs);
+
+  // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion.
+  std::optional<GpsLog> log = inputs.gps;
+  if (!log && !inputs.gps_path.empty()) log = ReadGps(inputs.gps_path, options.gps_read);
+  if (log) {
+    LogSkippedFixes(*log);
+    summary.gps_format = log->format;
+    summary.gps_fixes = static_cast<int>(log->fixes.size());
+    summary.gps_skipped = static_cast<int>(log->skipped.size());
+  }
+  if (log && !log->fixes.empty() && !inputs.keyframes.empty()) {
+    const EnuFrame enu = MakeEnuFrame(*log, inputs.enu_origin);
+    std::vector<double> times;
+    for (const FramePose& f : trajectory) times.push_back(f.timestamp);
+    GpsFusionOptions fusion_options = options.fusion;
+    fusion_options.sampling.time_offset_s =
+        options.time_offset_s.value_or(GuessTimeOffset(log->fixes, times));
+    fusion_options.alignment.estimate_scale = inputs.monocular;
+    summary.time_offset_s = fusion_options.sampling.time_offset_s;
+    if (options.fuse) {
+      GpsFusionInput fusion_input{inputs.keyframes, inputs.frames, inputs.edges, log->fixes};
+      out.fusion = FuseGps(fusion_input, enu, fusion_options);
+      if (out.fusion) {
+        out.georeference = out.fusion->georeference;
+        out.alignment = out.fusion->prealignment;
+        out.samples = out.fusion->samples;
+        summary.fused = true;
+        summary.gps_samples = static_cast<int>(out.fusion->samples.size());
+        summary.gps_inliers = out.fusion->num_inliers;
+        summary.fused_rmse_m = out.fusion->inlier_rmse_m;
+      }
+    } else {
+      out.samples = SampleGpsPairs(Positions(trajectory), log->fixes, enu, fusion_options.sampling);
+      summary.gps_samples = static_cast<int>(out.samples.size());
+      out.alignment = AlignMapToGps(out.samples, fusion_options.alignment);
+      if (out.alignment) {
+        out.georeference = Georeference(enu, out.alignment->enu_from_map);
+        summary.gps_inliers = out.alignment->num_inliers;
+      }
+    }
+    if (out.alignment) summary.single_sim3_rmse_m = out.alignment->inlier_rmse_m;
+    if (!out.georeference) {
+      spdlog::warn(
+          "GPS: {} fixes did not determine the map's place in the world (too few samples every {} frames, "
+          "or all on one straight line); no WGS84 outputs",
+          log->fixes.size(), fusion_options.sampling.every_n_frames);
+    }
+  }
+  summary.georeferenced = out.georeference.has_value();
+  if (out.georeference) summary.metres_per_map_unit = out.georeference->MetresPerMapUnit();
+
+  const FramePositions keyframe_positions = Positions(inputs.keyframes);
+  if (out.georeference) {
+    const Georeference& g = *out.georeference;
+    // 2. The WGS84 trajectory.
+    WriteTrajectoryWgs84(out_dir / "trajectory_wgs84.csv", trajectory, g);
+    out.files.push_back(out_dir / "trajectory_wgs84.csv");
+    summary.trajectory_frames = static_cast<int>(trajectory.size());
+
+    // 3. Landmarks.
+    if (!inputs.landmarks_path.empty()) {
+      OsmLandmarkOptions osm;
+      osm.radius_m = options.osm_radius_m;
+      for (const FramePose& k : inputs.keyframes)
+        osm.trajectory.push_back(g.MapToWgs84(k.world_from_camera.translation));
+      std::vector<Landmark> catalogue = ReadLandmarks(inputs.landmarks_path, osm);
+      MakeLandmarkNamesUnique(catalogue);
+      out.landmarks = PlaceLandmarks(catalogue, g, keyframe_positions, options.landmarks);
+      WriteLandmarksGeoJson(out_dir / "landmarks.geojson", out.landmarks, keyframe_positions,
+                            options.landmarks.sigma_m);
+      out.files.push_back(out_dir / "landmarks.geojson");
+      summary.landmarks = static_cast<int>(out.landmarks.size());
+      summary.landmarks_associated =
+          static_cast<int>(std::count_if(out.landmarks.begin(), out.landmarks.end(),
+                                         [](const PlacedLandmark& l) { return l.nearest_keyframe >= 0; }));
+    }
+
+    // 4. The topological map.
+    out.topology = BuildTopologicalMap(keyframe_positions, out.landmarks, g, options.topology);
+    WriteTopologyFiles(out_dir, *out.topology);
+    for (const char* name : {"topology.geojson", "topology.graphml", "topology.dot", "topology.json"}) {
+      out.files.push_back(out_dir / name);
+    }
+    out.map_sections["topology"] = TopologyJsonString(*out.topology);
+    out.map_sections["geo"] = GeoSectionJson(g, out.landmarks, options.landmarks.sigma_m);
+    summary.topology_nodes = static_cast<int>(out.topology->nodes.size());
+    summary.topology_landmark_nodes = out.topology->NumLandmarkNodes();
+    summary.topology_turn_nodes = out.topology->NumTurnNodes();
+    summary.topology_edges = static_cast<int>(out.topology->edges.size());
+    summary.topology_revisited_nodes = out.topology->NumRevisitedNodes();
+  }
+
+  // 5. Objects.
+  if (!inputs.points.empty()) {
+    out.objects =
+        BuildObjectMap(inputs.points, options.objects, out.georeference ? &*out.georeference : nullptr);
+    WriteObjectsJson(out_dir / "objects.json", out.objects, options.objects);
+    out.files.push_back(out_dir / "objects.json");
+    summary.objects = static_cast<int>(out.objects.objects.size());
+    for (const SemanticObject& o : out.objects.objects)
+      summary.objects_per_class[std::string(ClassKey(o.label))]++;
+  }
+
+  // 6. Plots.
+  if (options.write_plots) {
+    const fs::path plots = out_dir / "plots";
+    const auto write = [&](const std::string& name, const cv::Mat& image) {
+      WritePlot(plots / name, image);
+      out.files.push_back(plots / name);
+    };
+    // Without GPS the map is shown level (the first camera looking north), in map units.
+    const Georeference view_frame =
+        out.georeference ? *out.georeference : Georeference(EnuFrame(Wgs84{0, 0, 0}), LevelFromCameraWorld());
+    const Points3d trajectory_enu = TrajectoryEnu(trajectory, view_frame);
+    if (out.georeference && out.alignment) {
+      GpsPlotInput gps;
+      for (const GpsSample& sample : out.samples) gps.gps_enu.push_back(sample.enu);
+      gps.gps_inliers = out.fusion ? out.fusion->inliers : out.alignment->inliers;
+      if (out.fusion) {
+        for (const FramePose& f : trajectory) {
+          gps.single_sim3_enu.push_back(out.alignment->enu_from_map * f.world_from_camera.translation);
+        }
+      }
+      gps.trajectory_enu = trajectory_enu;
+      write("gps.png",
+            RenderGpsPlot(
+                gps, Titled(options.plots, out.fusion ? "GPS fixes and the fused SLAM trajectory"
+                                                      : "GPS fixes and the transformed SLAM trajectory")));
+    }
+    if (out.topology)
+      write("topology.png", RenderTopologyPlot(*out.topology, Titled(options.plots, "Topological map")));
+    if (!inputs.points.empty()) {
+      Points3d points_enu;
+      std::vector<int> labels;
+      points_enu.reserve(inputs.points.size());
+      for (const LabeledPoint& p : inputs.points) {
+        points_enu.push_back(view_frame.MapToEnu(p.position));
+        labels.push_back(p.label);
+      }
+      write("semantic_map.png", RenderSemanticMapPlot(points_enu, labels, trajectory_enu,
+                                                      Titled(options.plots, "Semantic map (top view)")));
+    }
+    if (out.georeference && !out.landmarks.empty()) {
+      Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      for (const Eigen::Vector3d& p : trajectory_enu) {
+        lo = lo.cwiseMin(p.head<2>());
+        hi = hi.cwiseMax(p.head<2>());
+      }
+      for (const PlacedLandmark& l : out.landmarks) {
+        lo = lo.cwiseMin(l.enu.head<2>());
+        hi = hi.cwiseMax(l.enu.head<2>());
+      }
+      const double pad = 3.0 * options.landmarks.sigma_m;
+      const MembershipRaster raster =
+          RasterizeMembership(out.landmarks, lo.array() - pad, hi.array() + pad, options.raster_cell_m,
+                              options.landmarks.sigma_m, 1'000'000);
+      write("membership.png", RenderMembershipPlot(raster, out.landmarks, trajectory_enu,
+                                                   Titled(options.plots, "Landmark membership m(x, y)")));
+    }
+  }
+  return out;
+}
+
+std::string GeoSectionJson(const Georeference& georeference, const std::vector<PlacedLandmark>& landmarks,
+                           double sigma_m) {
+  const json root = {{"format", "semslam-geo"},
+                     {"version", 1},
+                     {"georeference", json::parse(GeoreferenceToJson(georeference))},
+                     {"landmarks", json::parse(PlacedLandmarksToJson(landmarks))},
+                     {"sigma_m", sigma_m}};
+  return root.dump();
+}
+
+GeoContext ParseGeoSection(const std::string& text, const fs::path& source) {
+  const auto fail = [&](const std::string& field, const std::string& message) {
+    throw InputError(SourceLocation{source, 0}, field, message);
+  };
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    fail("json", e.what());
+  }
+  if (!root.is_object() || root.value("format", std::string()) != "semslam-geo") {
+    fail("format", "not a semslam geo section (expected \"format\": \"semslam-geo\")");
+  }
+  if (!root.contains("version") || root["version"] != 1) fail("version", "unsupported version");
+  for (const char* key : {"georeference", "landmarks", "sigma_m"}) {
+    if (!root.contains(key)) fail(key, "missing");
+  }
+  if (!root["sigma_m"].is_number() || !(root["sigma_m"].get<double>() > 0))
+    fail("sigma_m", "expected a positive number");
+  GeoContext context{GeoreferenceFromJson(root["georeference"].dump(), source),
+                     PlacedLandmarksFromJson(root["landmarks"].dump(), source),
+                     root["sigma_m"].get<double>()};
+  return context;
+}
+
+GeoPose LocateInWorld(const Rigid3d& world_from_camera, const GeoContext& context, size_t max_landmarks) {
+  const Georeference& g = context.georeference;
+  const Eigen::Vector3d centre = world_from_camera.translation;
+  GeoPose pose;
+  pose.enu = g.MapToEnu(centre);
+  pose.wgs84 = g.enu_frame.ToWgs84(pose.enu);
+  const Eigen::Quaterniond enu_from_map_rotation =
+      g.local ? g.local->keyframes()[g.local->NearestInMap(centre)].enu_from_map.rotation
+              : g.enu_from_map.rotation;
+  const Eigen::Vector3d forward =
+      enu_from_map_rotation * (world_from_camera.rotation * Eigen::Vector3d::UnitZ());
+  double bearing = std::atan2(forward.x(), forward.y()) * 180.0 / std::numbers::pi;
+  if (bearing < 0) bearing += 360.0;
+  pose.heading_deg = bearing;
+  for (const NearLandmark& n :
+       NearestLandmarks(centre, context.landmarks, g, context.sigma_m, max_landmarks)) {
+    pose.nearest.push_back(
+        {context.landmarks[static_cast<size_t>(n.landmark)].landmark.name, n.distance_m, n.membership});
+  }
+  return pose;
+}
+
+}  // namespace semslam

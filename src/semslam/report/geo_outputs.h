@@ -1,0 +1,125 @@
+#pragma once
+// Everything after SLAM that ties the map to the world, in one call for `semslam run`: GPS fusion (robust
+// Sim(3) and the pose-graph fusion), the WGS84 trajectory, landmarks, the topological map, objects and plots.
+// Plain data in, files out:
+//
+//   OUT/trajectory_wgs84.csv   t,lat,lon,alt for every tracked frame          (with GPS)
+//   OUT/landmarks.geojson      WGS84 points with map_xyz, nearest keyframe, membership (with GPS and a
+//   catalogue) OUT/topology.{geojson,graphml,dot,json}                                   (with GPS)
+//   OUT/objects.json           clustered labeled points                       (with labeled points)
+//   OUT/plots/gps.png, topology.png, semantic_map.png, membership.png         (when their inputs exist)
+//
+// and, for `semslam localize`, the map file's extra sections ("geo": georeference and placed landmarks;
+// "topology": the topology JSON that `semslam route` reads).
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "semslam/geo/frame_position.h"
+#include "semslam/geo/gps.h"
+#include "semslam/geo/gps_fusion.h"
+#include "semslam/landmarks/catalogue.h"
+#include "semslam/landmarks/landmark_map.h"
+#include "semslam/objects/object_map.h"
+#include "semslam/report/plots.h"
+#include "semslam/topology/topological_map.h"
+
+namespace semslam {
+
+struct GeoInputs {
+  std::vector<FramePose> frames;         // every tracked frame, in frame order (world_from_camera in the map)
+  std::vector<FramePose> keyframes;      // in frame order, keyframe_id set
+  std::vector<FusionEdge> edges;         // optional covisibility and loop edges (indices into keyframes)
+  std::optional<GpsLog> gps;             // the GPS log, or
+  std::filesystem::path gps_path;        // a KITTI oxts folder, CSV or NMEA file (read when `gps` is empty)
+  std::filesystem::path landmarks_path;  // CSV, GeoJSON or OSM catalogue; empty: none
+  std::vector<LabeledPoint> points;      // labeled map points (map frame)
+  bool monocular = true;                 // Sim(3) alignment and fusion; false: SE(3) (stereo)
+  std::optional<Wgs84> enu_origin;       // default: the first GPS fix
+};
+
+struct GeoOptions {
+  GpsReadOptions gps_read;
+  GpsFusionOptions fusion;  // sampling (every 30 frames), robust alignment, pose graph; estimate_scale is set
+                            // from GeoInputs::monocular
+  bool fuse = true;         // the pose-graph fusion; false: the single robust similarity (the paper's method)
+  std::optional<double> time_offset_s;  // frame time + offset = GPS time; default: GuessTimeOffset
+  LandmarkOptions landmarks;
+  double osm_radius_m = 150.0;  // OSM catalogues: features within this distance of the trajectory
+  TopologyOptions topology;
+  ObjectMapOptions objects;
+  bool write_plots = true;
+  PlotOptions plots;
+  double raster_cell_m = 2.0;
+
+  void Check() const;  // throws InvalidArgument
+};
+
+// Figures for run.json.
+struct GeoSummary {
+  bool georeferenced = false;
+  bool fused = false;
+  std::string gps_format;
+  int gps_fixes = 0, gps_skipped = 0, gps_samples = 0, gps_inliers = 0;
+  double time_offset_s = 0.0;
+  double metres_per_map_unit = 1.0;
+  double single_sim3_rmse_m = 0.0;  // residuals of the robust similarity, inliers
+  double fused_rmse_m = 0.0;        // residuals after the fusion, inliers
+  int landmarks = 0, landmarks_associated = 0;
+  int topology_nodes = 0, topology_landmark_nodes = 0, topology_turn_nodes = 0, topology_edges = 0,
+      topology_revisited_nodes = 0;
+  int objects = 0;
+  std::map<std::string, int> objects_per_class;
+  int trajectory_frames = 0;
+
+  std::string ToJson() const;  // one JSON object
+};
+
+struct GeoOutputs {
+  std::optional<Georeference> georeference;
+  std::vector<GpsSample> samples;         // (GPS, frame) pairs sampled every N frames
+  std::optional<GpsAlignment> alignment;  // the robust similarity of the samples
+  std::optional<GpsFusionResult> fusion;  // when fused
+  std::vector<PlacedLandmark> landmarks;
+  std::optional<TopologicalMap> topology;
+  ObjectMap objects;
+  std::map<std::string, std::string> map_sections;  // for MapFileContents::extra_sections
+  std::vector<std::filesystem::path> files;         // written
+  GeoSummary summary;
+};
+
+// Throws InputError for unreadable GPS logs or catalogues, InvalidArgument for bad options or inputs. Missing
+// GPS is not an error: only objects (metric radii taken as map units) and the semantic map plot are written.
+GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const std::filesystem::path& out_dir,
+                           const GeoOptions& options = {});
+
+// ---- For `semslam localize` ----
+
+// What the map file's "geo" section holds.
+struct GeoContext {
+  Georeference georeference;
+  std::vector<PlacedLandmark> landmarks;
+  double sigma_m = 25.0;
+};
+std::string GeoSectionJson(const Georeference& georeference, const std::vector<PlacedLandmark>& landmarks,
+                           double sigma_m);
+// Throws InputError naming `source` (e.g. "map.semslam#geo") and the field.
+GeoContext ParseGeoSection(const std::string& text, const std::filesystem::path& source);
+
+struct NamedMembership {
+  std::string name;
+  double distance_m = 0.0;  // horizontal
+  Membership membership;
+};
+struct GeoPose {
+  Eigen::Vector3d enu = Eigen::Vector3d::Zero();
+  Wgs84 wgs84;
+  double heading_deg = 0.0;  // compass bearing of the camera's viewing direction (0 north, 90 east)
+  std::vector<NamedMembership> nearest;  // nearest landmarks first
+};
+GeoPose LocateInWorld(const Rigid3d& world_from_camera, const GeoContext& context, size_t max_landmarks = 3);
+
+}  // namespace semslam

@@ -1,1 +1,0 @@
-// Placeholder until the report module has sources.

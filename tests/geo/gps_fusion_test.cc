@@ -1,0 +1,142 @@
+#include "semslam/geo/gps_fusion.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "synthetic_drive.h"
+
+namespace semslam {
+namespace {
+
+using testing::Drive;
+using testing::EnuFromCamera;
+using testing::MakeDrive;
+
+GpsFusionInput Input(const Drive& d, int keyframe_every) {
+  GpsFusionInput input;
+  input.frames = d.frames;
+  for (size_t i = 0; i < d.frames.size(); i += static_cast<size_t>(keyframe_every)) {
+    FramePose k = d.frames[i];
+    k.keyframe_id = static_cast<long long>(input.keyframes.size());
+    input.keyframes.push_back(k);
+  }
+  input.fixes = d.fixes;
+  return input;
+}
+
+// RMSE over every frame of the ENU positions given by a georeference, without any further alignment.
+double AteEnu(const Drive& d, const Georeference& g) {
+  double sum = 0.0;
+  for (size_t i = 0; i < d.frames.size(); ++i) {
+    sum += (g.FrameToEnu(i, d.frames[i].world_from_camera.translation) - d.truth_enu[i]).squaredNorm();
+  }
+  return std::sqrt(sum / static_cast<double>(d.frames.size()));
+}
+
+double AteGlobal(const Drive& d, const Sim3d& enu_from_map) {
+  return AteEnu(d, Georeference(d.enu, enu_from_map));
+}
+
+TEST(GpsFusion, CorrectsMonocularScaleDrift) {
+  const Drive d = MakeDrive(0.01, 0.0, 0.05, 1.0, 30, 0.0, 1);
+  const auto result = FuseGps(Input(d, 5), d.enu);
+  ASSERT_TRUE(result);
+  const double single = AteGlobal(d, result->prealignment.enu_from_map);
+  const double fused = AteEnu(d, result->georeference);
+  RecordProperty("ate_single_sim3_m", std::to_string(single));
+  RecordProperty("ate_fused_m", std::to_string(fused));
+  std::printf("scale drift 1 %%/100 m, sigma 1 m every 30 frames: ATE single Sim(3) %.2f m, fused %.2f m\n",
+              single, fused);
+  EXPECT_GT(single, 3.0);  // one similarity cannot follow a 19 % scale change
+  EXPECT_LT(fused, 1.0);
+  EXPECT_EQ(result->num_inliers, static_cast<int>(result->samples.size()));
+  EXPECT_EQ(result->samples.size(), d.fixes.size());
+  EXPECT_LT(result->inlier_rmse_m, 2.0);  // 3D residuals of sigma-1 noise: about sqrt(3)
+  ASSERT_EQ(result->keyframe_enu_from_camera.size(), Input(d, 5).keyframes.size());
+  // The fused keyframe centres are the frames' ENU positions.
+  EXPECT_NEAR((result->keyframe_enu_from_camera[40].translation - d.truth_enu[200]).norm(), 0.0, 1.5);
+  // Metres per map unit near the start and the end follow the drift (20 units per metre at the start).
+  const double start_scale = result->keyframe_enu_from_camera.front().scale;
+  const double end_scale = result->keyframe_enu_from_camera.back().scale;
+  EXPECT_NEAR(start_scale, 20.0, 1.0);
+  EXPECT_NEAR(end_scale / start_scale, 1.0 / std::pow(1.01, 17.5), 0.02);
+}
+
+TEST(GpsFusion, RejectsOutlierFixes) {
+  for (const unsigned seed : {2u, 3u, 4u}) {
+    const Drive d = MakeDrive(0.01, 0.2, 0.05, 1.0, 30, 0.05, seed);
+    const auto result = FuseGps(Input(d, 7), d.enu);  // sampled frames mostly not keyframes
+    ASSERT_TRUE(result);
+    const double single = AteGlobal(d, result->prealignment.enu_from_map);
+    const double fused = AteEnu(d, result->georeference);
+    std::printf(
+        "seed %u, 5 %% outliers of 50 m, yaw drift 0.2 deg/100 m: ATE single Sim(3) %.2f m, fused %.2f m\n",
+        seed, single, fused);
+    EXPECT_LT(fused, 1.0) << seed;
+    EXPECT_LT(fused, single) << seed;
+    int missed = 0, dropped = 0;
+    for (size_t s = 0; s < result->samples.size(); ++s) {
+      const bool bad = d.outlier[result->samples[s].fix_index];
+      missed += bad && result->inliers[s] ? 1 : 0;
+      dropped += !bad && !result->inliers[s] ? 1 : 0;
+    }
+    EXPECT_EQ(missed, 0) << seed;
+    EXPECT_LE(dropped, 1) << seed;
+  }
+}
+
+TEST(GpsFusion, StereoKeepsTheScale) {
+  const Drive d = MakeDrive(0.0, 0.3, 1.0, 1.0, 30, 0.0, 5);
+  GpsFusionOptions options;
+  options.alignment.estimate_scale = false;
+  const auto result = FuseGps(Input(d, 5), d.enu, options);
+  ASSERT_TRUE(result);
+  for (const Sim3d& pose : result->keyframe_enu_from_camera) EXPECT_DOUBLE_EQ(pose.scale, 1.0);
+  EXPECT_DOUBLE_EQ(result->georeference.enu_from_map.scale, 1.0);
+  EXPECT_LT(AteEnu(d, result->georeference), 1.0);
+}
+
+TEST(GpsFusion, LoopEdgesAndBadInputs) {
+  const Drive d = MakeDrive(0.01, 0.0, 0.05, 1.0, 30, 0.0, 6);
+  GpsFusionInput input = Input(d, 5);
+  // The last street passes the first one's place again: a loop between keyframes 40 (frame 200) and the
+  // keyframe of the last lap nearest to it, measured as a loop closure's Sim(3) would (true relative pose at
+  // frame 200's map scale, and the ratio of the two map scales).
+  size_t a = 200, b = 1500;
+  for (size_t f = 1500; f < d.frames.size(); f += 5) {
+    if ((d.truth_enu[f] - d.truth_enu[a]).head<2>().norm() <
+        (d.truth_enu[b] - d.truth_enu[a]).head<2>().norm()) {
+      b = f;
+    }
+  }
+  ASSERT_LT((d.truth_enu[b] - d.truth_enu[a]).head<2>().norm(), 3.0);  // the road's grade differs by metres
+  const Rigid3d relative = d.truth[a].Inverse() * d.truth[b];
+  FusionEdge loop;
+  loop.a = static_cast<int>(a / 5);
+  loop.b = static_cast<int>(b / 5);
+  loop.kind = FusionEdgeKind::kLoop;
+  loop.a_from_b =
+      Sim3d(d.map_scale[a] / d.map_scale[b], relative.rotation, d.map_scale[a] * relative.translation);
+  input.edges.push_back(loop);
+  const auto result = FuseGps(input, d.enu);
+  ASSERT_TRUE(result);
+  EXPECT_LT(AteEnu(d, result->georeference), 1.0);
+
+  input.edges.back().b = 100000;
+  EXPECT_THROW(FuseGps(input, d.enu), InvalidArgument);
+  input = Input(d, 5);
+  std::swap(input.keyframes[3], input.keyframes[4]);
+  EXPECT_THROW(FuseGps(input, d.enu), InvalidArgument);
+  input = Input(d, 5);
+  input.fixes.resize(3);
+  EXPECT_FALSE(FuseGps(input, d.enu));  // three fixes are too few
+  GpsFusionOptions bad;
+  bad.outlier_sigma = 0;
+  EXPECT_THROW(FuseGps(Input(d, 5), d.enu, bad), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semslam
