@@ -27,6 +27,9 @@ struct RunArgs {
   std::string segmenter = "none";
   std::uint64_t seed = 0;
   bool exclude_dynamic = false;
+  std::string gps;
+  std::string landmarks;
+  bool no_gps_fusion = false;
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
@@ -49,6 +52,9 @@ void Run(const RunArgs& args) {
   options.slam.localization_only = args.localization_only;
   options.slam.exclude_dynamic = args.exclude_dynamic;
   options.segmenter = args.segmenter;
+  options.gps = args.gps;
+  options.landmarks = args.landmarks;
+  options.gps_fusion = !args.no_gps_fusion;
   options.seed = args.seed;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.map_in = args.map_in;
@@ -84,6 +90,14 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_flag(
       "--exclude-dynamic", args->exclude_dynamic,
       "Keep points on persons, riders and vehicles out of tracking and relocalization (needs a segmenter)");
+  cmd->add_option("--gps", args->gps, "GPS log: KITTI oxts folder, CSV (t,lat,lon[,alt,sigma]) or NMEA file")
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--landmarks", args->landmarks,
+                  "Landmark catalogue: CSV (name,lat,lon[,alt,category]), GeoJSON or .osm/.osm.pbf")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag(
+      "--no-gps-fusion", args->no_gps_fusion,
+      "Tie the map to GPS with one robust similarity (the paper's method) instead of the pose-graph fusion");
   cmd->add_option("--seed", args->seed, "Seed of noisy segmenters")->capture_default_str();
   cmd->add_flag("--localization-only", args->localization_only,
                 "Track against --map-in without changing it (no new keyframes or points)");

@@ -12,8 +12,11 @@
 #include "semslam/eval/trajectory_metrics.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
+#include "semslam/report/geo_evaluation.h"
+#include "semslam/report/geo_outputs.h"
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
+#include "semslam/sim/scene_file.h"
 #include "semslam/system/semantic_evaluation.h"
 
 namespace semslam {
@@ -129,7 +132,28 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
   WriteKittiPoses(options.output / "trajectory.kitti", trajectory);
-  if (options.save_map && !options.slam.localization_only) slam.SaveMap(options.output / "map.semslam");
+  const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
+  WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
+
+  // GPS, landmarks, topology, objects and plots.
+  GeoInputs geo;
+  geo.frames = slam.FramePoses();
+  geo.keyframes = slam.KeyFramePoses();
+  geo.edges = slam.KeyFrameEdges();
+  geo.gps_path = options.gps;
+  geo.landmarks_path = options.landmarks;
+  geo.monocular = !stereo;
+  for (const SemanticPoint& p : semantic_points) {
+    if (IsValidTrainId(p.label)) geo.points.push_back({p.position, p.label, p.confidence});
+  }
+  GeoOptions geo_options;
+  geo_options.fuse = options.gps_fusion;
+  const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);
+  MapFileContents map_sections;
+  map_sections.extra_sections = geo_outputs.map_sections;
+  if (options.save_map && !options.slam.localization_only) {
+    slam.SaveMap(options.output / "map.semslam", map_sections);
+  }
 
   RunSummary summary;
   summary.statistics = stats;
@@ -158,8 +182,6 @@ RunSummary RunSequence(const RunOptions& options) {
                      {"correction_m", e.correction_m}});
   }
   run["loop_events"] = loops;
-  const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
-  WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
   run["classes"] = ClassCountsJson(CountLabels(semantic_points));
   nlohmann::json segmentation = {{"segmenter", segmenter_description},
                                  {"segmented_keyframes", stats.segmented_keyframes},
@@ -190,10 +212,15 @@ RunSummary RunSequence(const RunOptions& options) {
       run["ate_scale"] = ate.scale;
       run["ate_matched"] = ate.matched;
       run["path_length_m"] = PathLength(*truth);
+      if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && geo_outputs.georeference) {
+        const SceneTruth truth_scene = ReadSceneTruth(scene->parent_path());
+        run["geo_evaluation"] = nlohmann::json::parse(EvaluateGeo(geo_outputs, geo, truth_scene).ToJson());
+      }
     } catch (const EvaluationError& e) {
       spdlog::warn("no accuracy figures: {}", e.what());
     }
   }
+  run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
   WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
   return summary;

@@ -24,6 +24,12 @@ struct RunOptions {
   // onnx:CARD.yaml, labels:DIR, truth-noisy:RATE, ...).
   std::string segmenter = "none";
   std::uint64_t seed = 0;  // for noisy segmenters
+  // Ties the map to the world: a GPS log (KITTI oxts folder, CSV t,lat,lon[,alt,sigma] or NMEA) and a
+  // landmark catalogue (CSV, GeoJSON or OpenStreetMap); empty: none.
+  std::filesystem::path gps;
+  std::filesystem::path landmarks;
+  bool gps_fusion =
+      true;  // pose-graph fusion of the fixes; false: one robust similarity (the paper's method)
   bool save_map = true;
   bool show_progress = true;
 

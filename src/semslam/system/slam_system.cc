@@ -231,8 +231,14 @@ void SlamSystem::Finish() {
 }
 
 Trajectory SlamSystem::FrameTrajectory() const {
-  auto lock = map_->ReadLock();
   Trajectory trajectory;
+  for (const FramePose& pose : FramePoses()) trajectory.push_back({pose.timestamp, pose.world_from_camera});
+  return trajectory;
+}
+
+std::vector<FramePose> SlamSystem::FramePoses() const {
+  auto lock = map_->ReadLock();
+  std::vector<FramePose> poses;
   for (const FrameRecord& record : tracker_->records()) {
     if (record.reference == nullptr) continue;
     // A culled reference keyframe hands its frames to its parent through the stored relative pose.
@@ -244,9 +250,45 @@ Trajectory SlamSystem::FrameTrajectory() const {
     }
     if (kf->is_bad()) continue;
     const Rigid3d camera_from_world = camera_from_kf * kf->camera_from_world();
-    trajectory.push_back({record.timestamp, camera_from_world.Inverse()});
+    poses.push_back(
+        {static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world.Inverse()});
   }
-  return trajectory;
+  return poses;
+}
+
+std::vector<FramePose> SlamSystem::KeyFramePoses() const {
+  auto lock = map_->ReadLock();
+  std::vector<FramePose> poses;
+  for (const KeyFrame* kf : map_->KeyFrames()) {
+    if (kf->is_bad()) continue;
+    poses.push_back({static_cast<size_t>(kf->frame_id()), static_cast<long long>(kf->id()), kf->timestamp(),
+                     kf->world_from_camera()});
+  }
+  std::sort(poses.begin(), poses.end(),
+            [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+  return poses;
+}
+
+std::vector<FusionEdge> SlamSystem::KeyFrameEdges(int min_covisibility_weight) const {
+  const std::vector<FramePose> keyframes = KeyFramePoses();
+  auto lock = map_->ReadLock();
+  std::unordered_map<std::uint64_t, int> index;
+  for (size_t i = 0; i < keyframes.size(); ++i)
+    index[static_cast<std::uint64_t>(keyframes[i].keyframe_id)] = static_cast<int>(i);
+  std::vector<FusionEdge> edges;
+  auto add = [&](const KeyFrame* a, const KeyFrame* b, FusionEdgeKind kind) {
+    const auto ia = index.find(a->id()), ib = index.find(b->id());
+    if (ia == index.end() || ib == index.end() || ia->second >= ib->second) return;
+    edges.push_back(
+        {ia->second, ib->second, Sim3d(a->camera_from_world() * b->world_from_camera()), kind, 1.0});
+  };
+  for (const KeyFrame* kf : map_->KeyFrames()) {
+    if (kf->is_bad()) continue;
+    for (const KeyFrame* other : kf->loop_edges()) add(kf, other, FusionEdgeKind::kLoop);
+    for (KeyFrame* other : kf->CovisiblesWithWeightAtLeast(min_covisibility_weight))
+      add(kf, other, FusionEdgeKind::kCovisibility);
+  }
+  return edges;
 }
 
 Trajectory SlamSystem::KeyFrameTrajectory() const {

@@ -13,6 +13,8 @@
 #include <unordered_map>
 
 #include "semslam/core/timing.h"
+#include "semslam/geo/frame_position.h"
+#include "semslam/geo/gps_fusion.h"
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/trajectory.h"
 #include "semslam/loop/loop_closer.h"
@@ -88,6 +90,12 @@ class SlamSystem {
   // Every tracked frame (world_from_camera), following its reference keyframe's current pose.
   Trajectory FrameTrajectory() const;
   Trajectory KeyFrameTrajectory() const;
+  // The same with frame indices (and keyframe ids), in frame order.
+  std::vector<FramePose> FramePoses() const;
+  std::vector<FramePose> KeyFramePoses() const;
+  // Loop edges and strong covisibility links between the keyframes of KeyFramePoses() (indices into it), with
+  // their current relative poses: the map's own constraints for GPS fusion.
+  std::vector<FusionEdge> KeyFrameEdges(int min_covisibility_weight = 100) const;
   SlamStatistics Statistics() const;
   std::vector<LoopEvent> Loops() const;
 
