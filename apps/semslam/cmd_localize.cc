@@ -1,14 +1,74 @@
-#include <CLI/CLI.hpp>
+// semslam localize: every frame of a sequence relocalized against a saved map without GPS, reported in the
+// map, in WGS84 and as the nearest landmarks with their memberships.
 
-#include <stdexcept>
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <memory>
+#include <string>
 
 #include "commands.h"
+#include "semslam/system/localizer.h"
+#include "semslam/system/sequence_runner.h"
+#include "semslam/system/slam_config.h"
 
 namespace semslam::cli {
+namespace {
+
+struct LocalizeArgs {
+  std::string map;
+  std::string sequence;
+  std::string out;
+  std::string mode = "mono";
+  std::string frames;
+  std::string config;
+  std::string vocabulary;
+  size_t landmarks = 3;
+  bool quiet = false;
+};
+
+void Run(const LocalizeArgs& args) {
+  LocalizeOptions options;
+  options.map = args.map;
+  options.sequence = args.sequence;
+  options.output = args.out;
+  options.slam.mode = args.mode == "stereo" ? SensorMode::kStereo : SensorMode::kMonocular;
+  options.slam.tracker.monocular = options.slam.mode == SensorMode::kMonocular;
+  options.slam.pacing = Pacing::kFast;
+  if (!args.config.empty()) ApplySlamConfig(args.config, &options.slam);
+  if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
+  if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
+  options.max_landmarks = args.landmarks;
+  options.show_progress = !args.quiet;
+  const LocalizeSummary summary = LocalizeSequence(options);
+  std::printf("%zu of %zu frames localized", summary.localized, summary.frames);
+  if (summary.within_1m >= 0) std::printf(", %.1f %% within 1 m", 100.0 * summary.within_1m);
+  if (summary.nearest_landmark_right >= 0) {
+    std::printf(", nearest landmark right for %.1f %%", 100.0 * summary.nearest_landmark_right);
+  }
+  std::printf("\n");
+}
+
+}  // namespace
 
 void AddLocalizeCommand(CLI::App& app) {
+  auto args = std::make_shared<LocalizeArgs>();
   auto* cmd = app.add_subcommand("localize", "Relocalize a sequence against a saved map without GPS");
-  cmd->callback([] { throw std::runtime_error("localize: not implemented yet"); });
+  cmd->add_option("--map", args->map, "map.semslam written by semslam run")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--sequence", args->sequence, "Sequence to localize (any folder semslam run reads)")
+      ->required();
+  cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  cmd->add_option("--mode", args->mode, "Sensor mode")
+      ->check(CLI::IsMember({"mono", "stereo"}))
+      ->capture_default_str();
+  cmd->add_option("--frames", args->frames, "Frames A:B (A..B-1)");
+  cmd->add_option("--config", args->config, "YAML file of SLAM options")->check(CLI::ExistingFile);
+  cmd->add_option("--vocabulary", args->vocabulary, "Bag-of-words vocabulary")->check(CLI::ExistingFile);
+  cmd->add_option("--landmarks", args->landmarks, "Nearest landmarks reported per frame")
+      ->capture_default_str();
+  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace semslam::cli

@@ -119,7 +119,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     }
   } else {
     auto lock = map_.ReadLock();
-    ReplaceMergedPoints(*last_frame_);
+    if (last_frame_) ReplaceMergedPoints(*last_frame_);
     bool ok = false;
     if (state_ == TrackingState::kOk) {
       const bool map_changed = map_.big_change_index() != last_big_change_;

@@ -1,0 +1,198 @@
+#include "semslam/system/localizer.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/core/progress.h"
+#include "semslam/eval/trajectory_metrics.h"
+#include "semslam/io/sequence.h"
+#include "semslam/io/trajectory_io.h"
+#include "semslam/report/geo_evaluation.h"
+#include "semslam/report/geo_outputs.h"
+#include "semslam/sim/scene_file.h"
+
+namespace semslam {
+namespace {
+
+struct LocalizedFrame {
+  size_t frame = 0;
+  double timestamp = 0.0;
+  bool relocalized = false;
+  Rigid3d world_from_camera;
+  std::optional<GeoPose> geo;
+};
+
+std::string CsvLine(const LocalizedFrame& f, size_t max_landmarks) {
+  const Eigen::Vector3d& t = f.world_from_camera.translation;
+  const Eigen::Quaterniond& q = f.world_from_camera.rotation;
+  std::string line =
+      fmt::format("{},{:.6f},{},{:.6f},{:.6f},{:.6f},{:.9f},{:.9f},{:.9f},{:.9f}", f.frame, f.timestamp,
+                  f.relocalized ? "relocalized" : "tracked", t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  if (f.geo) {
+    line += fmt::format(",{:.9f},{:.9f},{:.3f},{:.1f}", f.geo->wgs84.latitude_deg, f.geo->wgs84.longitude_deg,
+                        f.geo->wgs84.altitude_m, f.geo->heading_deg);
+  } else {
+    line += ",,,,";
+  }
+  for (size_t k = 0; k < max_landmarks; ++k) {
+    if (f.geo && k < f.geo->nearest.size()) {
+      const NamedMembership& m = f.geo->nearest[k];
+      std::string name = m.name;
+      for (char& c : name) c = c == ',' || c == '"' ? ' ' : c;
+      line += fmt::format(",{},{:.1f},{:.4f}", name, m.distance_m, m.membership.value);
+    } else {
+      line += ",,,";
+    }
+  }
+  return line + "\n";
+}
+
+// The name of the landmark nearest (horizontally) to an ENU position; empty when there is none.
+std::string NearestTrueLandmark(const SceneTruth& truth, const Eigen::Vector3d& enu) {
+  std::string best;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (const auto& landmark : truth.landmarks) {
+    const double d = (landmark.enu.head<2>() - enu.head<2>()).norm();
+    if (d < best_distance) {
+      best_distance = d;
+      best = landmark.name;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+void LocalizeOptions::Check() const {
+  Require(!map.empty(), "localize: --map is required");
+  Require(!sequence.empty(), "localize: --sequence is required");
+  Require(!output.empty(), "localize: --out is required");
+  Require(first_frame < end_frame, "localize: the frame range is empty");
+  Require(max_landmarks >= 1, "localize: max_landmarks must be >= 1");
+}
+
+LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
+  options.Check();
+  Stopwatch watch;
+  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
+  const size_t first = options.first_frame;
+  const size_t end = std::min(options.end_frame, sequence->size());
+  if (first >= end) {
+    throw InvalidArgument(fmt::format("localize: frames {}:{} are outside the sequence's {} frames", first,
+                                      end, sequence->size()));
+  }
+  SlamOptions slam_options = options.slam;
+  slam_options.localization_only = true;
+  const bool stereo = slam_options.mode == SensorMode::kStereo;
+  if (stereo && !sequence->stereo()) {
+    throw InputError(sequence->directory(),
+                     "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
+  }
+  std::filesystem::create_directories(options.output);
+  SlamSystem slam(slam_options, sequence->camera(), sequence->stereo());
+  const MapFileContents contents = slam.LoadMap(options.map);
+  std::optional<GeoContext> geo;
+  if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
+    geo = ParseGeoSection(it->second, std::filesystem::path(options.map.string() + "#geo"));
+  } else {
+    spdlog::warn(
+        "{} has no georeference (it was built without GPS): poses are reported in the map frame only",
+        options.map.string());
+  }
+
+  std::vector<LocalizedFrame> localized;
+  ProgressReporter progress("localize", end - first, options.show_progress);
+  for (size_t i = first; i < end; ++i) {
+    const cv::Mat left = sequence->LoadImage(i, 0);
+    const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
+    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
+    if (result.state == TrackingState::kOk && result.camera_from_world) {
+      LocalizedFrame f;
+      f.frame = i;
+      f.timestamp = sequence->Timestamp(i);
+      f.relocalized = result.relocalized;
+      f.world_from_camera = result.camera_from_world->Inverse();
+      if (geo) f.geo = LocateInWorld(f.world_from_camera, *geo, options.max_landmarks);
+      localized.push_back(std::move(f));
+    }
+    progress.Update(i - first + 1, fmt::format("{} localized", localized.size()));
+  }
+  slam.Finish();
+  const SlamStatistics stats = slam.Statistics();
+  progress.Finish(fmt::format("{} of {} frames localized, {} relocalizations", localized.size(), end - first,
+                              stats.relocalizations));
+
+  LocalizeSummary summary;
+  summary.frames = end - first;
+  summary.localized = localized.size();
+  summary.relocalizations = stats.relocalizations;
+
+  Trajectory trajectory;
+  std::string csv = "frame,t,status,x,y,z,qx,qy,qz,qw,lat,lon,alt,heading_deg";
+  for (size_t k = 1; k <= options.max_landmarks; ++k)
+    csv += fmt::format(",landmark{0},distance{0}_m,membership{0}", k);
+  csv += "\n";
+  for (const LocalizedFrame& f : localized) {
+    trajectory.push_back({f.timestamp, f.world_from_camera});
+    csv += CsvLine(f, options.max_landmarks);
+  }
+  WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
+  WriteFileAtomically(options.output / "localization.csv", csv);
+
+  nlohmann::json report = {{"map", options.map.string()},        {"sequence", sequence->directory().string()},
+                           {"mode", stereo ? "stereo" : "mono"}, {"frames", summary.frames},
+                           {"localized", summary.localized},     {"relocalizations", summary.relocalizations},
+                           {"georeferenced", geo.has_value()}};
+  // Errors against the truth of a synthetic-city sequence.
+  if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && !localized.empty()) {
+    const SceneTruth truth = ReadSceneTruth(scene->parent_path());
+    std::vector<double> errors;
+    size_t landmark_checked = 0, landmark_right = 0;
+    if (geo) {
+      // In the scene's ENU frame, without any alignment: the map's georeference against the drive's truth.
+      const EnuFrame scene_enu(truth.origin);
+      for (const LocalizedFrame& f : localized) {
+        if (f.frame >= truth.positions_world.size()) continue;
+        const Eigen::Vector3d true_enu = truth.TrueEnu(f.frame);
+        errors.push_back((scene_enu.ToEnu(f.geo->wgs84) - true_enu).norm());
+        if (!f.geo->nearest.empty() && !truth.landmarks.empty()) {
+          ++landmark_checked;
+          landmark_right += f.geo->nearest.front().name == NearestTrueLandmark(truth, true_enu) ? 1 : 0;
+        }
+      }
+      report["error_frame"] = "enu";
+    } else if (const auto ground_truth = sequence->GroundTruth(); ground_truth && localized.size() >= 3) {
+      const AteResult ate =
+          ComputeAte(trajectory, *ground_truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+      errors = ate.errors;
+      report["error_frame"] = stereo ? "se3-aligned" : "sim3-aligned";
+    }
+    if (!errors.empty()) {
+      const auto within =
+          static_cast<double>(std::count_if(errors.begin(), errors.end(), [](double e) { return e < 1.0; }));
+      summary.within_1m = within / static_cast<double>(summary.frames);
+      std::vector<double> sorted = errors;
+      std::sort(sorted.begin(), sorted.end());
+      report["within_1m"] = summary.within_1m;
+      report["error_median_m"] = sorted[sorted.size() / 2];
+      report["error_p95_m"] = sorted[std::min(sorted.size() - 1, sorted.size() * 95 / 100)];
+      report["error_max_m"] = sorted.back();
+    }
+    if (landmark_checked > 0) {
+      summary.nearest_landmark_right =
+          static_cast<double>(landmark_right) / static_cast<double>(landmark_checked);
+      report["nearest_landmark_right"] = summary.nearest_landmark_right;
+    }
+  }
+  summary.seconds = watch.ElapsedSeconds();
+  report["seconds"] = summary.seconds;
+  WriteFileAtomically(options.output / "localize.json", report.dump(2) + "\n");
+  return summary;
+}
+
+}  // namespace semslam
