@@ -116,13 +116,23 @@ RunSummary RunSequence(const RunOptions& options) {
   slam.EnableSegmentation(segmenter);
 
   ProgressReporter progress("run", end - first, options.show_progress);
+  // Per frame: how tracking went and how big the map was (tracking time against map size).
+  std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points\n";
   for (size_t i = first; i < end; ++i) {
     const cv::Mat left = sequence->LoadImage(i, 0);
     const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
     const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
-    progress.Update(i - first + 1,
-                    fmt::format("{}, {} keyframes", ToString(result.state), slam.map().NumKeyFrames()));
+    size_t keyframes = 0, points = 0;
+    {
+      auto lock = slam.map().ReadLock();
+      keyframes = slam.map().NumKeyFrames();
+      points = slam.map().NumMapPoints();
+    }
+    tracking_csv += fmt::format("{},{},{:.3f},{},{},{}\n", i, ToString(result.state), result.milliseconds,
+                                result.matched_points, keyframes, points);
+    progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), keyframes));
   }
+  WriteFileAtomically(options.output / "tracking.csv", tracking_csv);
   slam.Finish();
   const SlamStatistics stats = slam.Statistics();
   progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,

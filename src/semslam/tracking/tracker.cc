@@ -178,7 +178,8 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   result.new_keyframes = new_keyframes_;
   if (result.relocalized) ++num_relocalizations_;
   last_frame_ = std::make_unique<Frame>(std::move(frame));
-  timing_.Add("tracking", watch.ElapsedMs());
+  result.milliseconds = watch.ElapsedMs();
+  timing_.Add("tracking", result.milliseconds);
   return result;
 }
 

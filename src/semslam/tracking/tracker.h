@@ -62,6 +62,7 @@ struct TrackingResult {
   bool reset_requested = false;            // lost right after initialization: the System should reset the map
   int matched_points = 0;
   std::optional<Rigid3d> camera_from_world;
+  double milliseconds = 0.0;  // time spent tracking this frame (features included)
 };
 
 // One entry per processed frame, to rebuild the trajectory after loop closure: the pose relative to a
