@@ -25,6 +25,7 @@ void LocalMapperOptions::Check() const {
   Require(redundant_keyframe_ratio > 0 && redundant_keyframe_ratio <= 1,
           "local mapper: redundant_keyframe_ratio must be in (0, 1]");
   Require(local_ba_iterations > 0, "local mapper: local_ba_iterations must be positive");
+  Require(min_parallax_deg >= 0 && min_parallax_deg < 90, "local mapper: min_parallax_deg must be in [0, 90)");
 }
 
 LocalMapper::LocalMapper(const LocalMapperOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -272,6 +273,7 @@ void LocalMapper::CreateNewMapPoints() {
     const Eigen::Vector3d c1 = kf1.center();
     const Rigid3d& t1w = kf1.camera_from_world();
     const Eigen::Matrix3d r_w1 = kf1.world_from_camera().rotation.toRotationMatrix();
+    const double max_cos_parallax = std::cos(options_.min_parallax_deg * M_PI / 180.0);
 
     for (size_t n = 0; n < neighbours.size(); ++n) {
       if (n > 0 && HasNewKeyFrames()) break;
@@ -306,7 +308,7 @@ void LocalMapper::CreateNewMapPoints() {
         const double cos_stereo = std::min(cos_stereo1, cos_stereo2);
 
         std::optional<Eigen::Vector3d> x;
-        if (cos_rays < cos_stereo && cos_rays > 0 && (stereo1 || stereo2 || cos_rays < 0.9998)) {
+        if (cos_rays < cos_stereo && cos_rays > 0 && (stereo1 || stereo2 || cos_rays < max_cos_parallax)) {
           x = TriangulatePoint(t1w, t2w, b1, b2);
         } else if (stereo1 && cos_stereo1 < cos_stereo2) {
           x = kf1.UnprojectStereo(i1);

@@ -28,6 +28,7 @@ struct LocalMapperOptions {
   double redundant_keyframe_ratio =
       0.9;  // a keyframe is culled when this share of its points is seen elsewhere
   int local_ba_iterations = 5;
+  double min_parallax_deg = 1.15;  // monocular triangulation: rays closer than this give no new point
   // No new points from keypoints a segmentation labeled as moving classes.
   bool exclude_dynamic = false;  // first pass; a second pass of twice as many follows without outliers
 

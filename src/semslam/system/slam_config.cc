@@ -62,6 +62,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
   s["tracking"] = {
       {"max_frames_between_keyframes", Bind(&o->tracker.max_frames_between_keyframes)},
       {"min_frames_between_keyframes", Bind(&o->tracker.min_frames_between_keyframes)},
+      {"keyframe_tracked_ratio_mono", Bind(&o->tracker.keyframe_tracked_ratio_mono)},
+      {"keyframe_tracked_ratio_stereo", Bind(&o->tracker.keyframe_tracked_ratio_stereo)},
       {"close_depth_baselines", Bind(&o->tracker.close_depth_baselines)},
       {"init_min_matches", Bind(&o->tracker.init_min_matches)},
       {"init_min_parallax_deg", Bind(&o->tracker.init_min_parallax_deg)},
@@ -74,6 +76,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"triangulation_neighbours_stereo", Bind(&o->mapper.triangulation_neighbours_stereo)},
       {"redundant_keyframe_ratio", Bind(&o->mapper.redundant_keyframe_ratio)},
       {"local_ba_iterations", Bind(&o->mapper.local_ba_iterations)},
+      {"min_parallax_deg", Bind(&o->mapper.min_parallax_deg)},
+      {"final_global_ba", Bind(&o->final_global_ba)},
   };
   s["loop"] = {
       {"enabled", Bind(&o->loop.enabled)},

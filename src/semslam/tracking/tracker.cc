@@ -28,6 +28,9 @@ void TrackerOptions::Check() const {
   Require(max_frames_between_keyframes >= 1, "tracker: max_frames_between_keyframes must be >= 1");
   Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
   Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
+  Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 && keyframe_tracked_ratio_stereo > 0 &&
+              keyframe_tracked_ratio_stereo <= 1,
+          "tracker: keyframe_tracked_ratio_mono/stereo must be in (0, 1]");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
   Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
           "tracker: init_min_parallax_deg must be >= 0, init_parallax_rank >= 1, init_min_points >= 8");
@@ -587,7 +590,7 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
     }
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
-  double ratio = options_.monocular ? 0.9 : 0.75;
+  double ratio = options_.monocular ? options_.keyframe_tracked_ratio_mono : options_.keyframe_tracked_ratio_stereo;
   if (num_keyframes < 2) ratio = 0.4;
 
   const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;

@@ -26,6 +26,9 @@ struct TrackerOptions {
   OrbOptions orb;             // for tracking frames
   int init_num_features = 0;  // features for monocular initialization frames (0 = 2 x orb.num_features)
   int max_frames_between_keyframes = 10;  // usually the frame rate
+  // A new keyframe is due when the frame tracks fewer than this share of the reference keyframe's points.
+  double keyframe_tracked_ratio_mono = 0.9;
+  double keyframe_tracked_ratio_stereo = 0.75;
   int min_frames_between_keyframes = 0;
   double close_depth_baselines = 40.0;  // stereo: points closer than this many baselines are "close"
   bool localization_only = false;       // track against the map without changing it
