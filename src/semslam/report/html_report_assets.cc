@@ -176,9 +176,9 @@ std::string_view HtmlReportScript() {
   const FOV = 50 * Math.PI / 180;
   const center = data.view ? [data.view.center[0], data.view.center[2], -data.view.center[1]] : [0, 0, 0];
   const radius = data.view && data.view.radius > 0 ? data.view.radius : 1;
-  const home = { target: center, distance: 1.9 * radius, yaw: -Math.PI / 2 - 0.6, pitch: 0.75 };
+  const home = { target: center, distance: 1.6 * radius, yaw: -Math.PI / 2 - 0.6, pitch: 0.75 };
   const camera = { target: home.target.slice(), distance: home.distance, yaw: home.yaw, pitch: home.pitch };
-  const settings = { pointSize: 2, trajectory: true, keyframes: true, landmarks: true, light: false };
+  const settings = { pointSize: labels.length < 20000 ? 3 : 2, trajectory: true, keyframes: true, landmarks: true, light: false };
 
   // ---- Column-major 4x4 matrices.
   function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
@@ -460,7 +460,11 @@ std::string_view HtmlReportScript() {
   const pointers = new Map();
   let mode = 'rotate';
   canvas.addEventListener('pointerdown', function (e) {
-    canvas.setPointerCapture(e.pointerId);
+    try {
+      canvas.setPointerCapture(e.pointerId);
+    } catch (error) {
+      // not an active pointer (a synthetic event): dragging still works inside the canvas
+    }
     pointers.set(e.pointerId, { x: e.clientX, y: e.clientY });
     mode = (e.button === 1 || e.button === 2 || e.shiftKey) ? 'pan' : 'rotate';
     e.preventDefault();
@@ -517,6 +521,8 @@ std::string_view HtmlReportScript() {
     wrap.style.background = settings.light ? '#fff' : '';
     requestDraw();
   });
+  const sizeSlider = document.getElementById('view-point-size');
+  if (sizeSlider) sizeSlider.value = String(settings.pointSize);
   on('view-point-size', 'input', function (e) { settings.pointSize = parseFloat(e.target.value) || 2; requestDraw(); });
   ['trajectory', 'keyframes', 'landmarks'].forEach(function (what) {
     on('show-' + what, 'change', function (e) { settings[what] = e.target.checked; requestDraw(); });
@@ -564,6 +570,9 @@ std::string_view HtmlReportScript() {
   on('classes-all', 'click', function () { showAll(true); });
   on('classes-none', 'click', function () { showAll(false); });
   window.addEventListener('resize', requestDraw);
+  // For scripted checks and the browser console.
+  window.semslamViewer = { camera: camera, settings: settings, visible: visible, redraw: draw,
+                           shown: shownCount };
   draw();
 })();
 )JS";
