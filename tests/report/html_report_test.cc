@@ -1,0 +1,572 @@
+#include "semslam/report/html_report.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/io/trajectory_io.h"
+#include "semslam/report/html_encoding.h"
+#include "semslam/report/plots.h"
+#include "semslam/semantics/class_table.h"
+#include "semslam/semantics/semantic_outputs.h"
+#include "support/test_support.h"
+
+namespace semslam {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+using testing::TempDir;
+
+constexpr std::string_view kDataOpen = "<script type=\"application/json\" id=\"semslam-data\">";
+constexpr std::string_view kTrickyName = "Caf\xC3\xA9 </script><b>&";
+
+std::string ReadText(const fs::path& file) {
+  std::ifstream stream(file, std::ios::binary);
+  std::ostringstream buffer;
+  buffer << stream.rdbuf();
+  return buffer.str();
+}
+
+std::string Base64Decode(std::string_view text) {
+  static constexpr std::string_view kAlphabet =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::uint32_t buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    if (c == '=') break;
+    const size_t v = kAlphabet.find(c);
+    if (v == std::string_view::npos) ADD_FAILURE() << "not base64: " << c;
+    buffer = (buffer << 6) | static_cast<std::uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<char>((buffer >> bits) & 0xffu));
+    }
+  }
+  return out;
+}
+
+std::vector<float> DecodeFloats(const std::string& base64) {
+  const std::string bytes = Base64Decode(base64);
+  EXPECT_EQ(bytes.size() % 4, 0u);
+  std::vector<float> values(bytes.size() / 4);
+  for (size_t i = 0; i < values.size(); ++i) {
+    std::uint32_t bits = 0;
+    for (int k = 0; k < 4; ++k)
+      bits |= std::uint32_t{static_cast<unsigned char>(bytes[4 * i + k])} << (8 * k);
+    values[i] = std::bit_cast<float>(bits);
+  }
+  return values;
+}
+
+// The JSON of the 3D view, or null when the page has none.
+json EmbeddedData(const std::string& html) {
+  const size_t open = html.find(kDataOpen);
+  if (open == std::string::npos) return nullptr;
+  const size_t begin = open + kDataOpen.size();
+  const size_t end = html.find("</script>", begin);
+  EXPECT_NE(end, std::string::npos);
+  return json::parse(html.substr(begin, end - begin));
+}
+
+std::string Between(const std::string& html, std::string_view from, std::string_view to) {
+  const size_t begin = html.find(from);
+  if (begin == std::string::npos) return "";
+  const size_t end = html.find(to, begin);
+  return html.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+}
+
+json RunJson() {
+  return {
+      {"sequence", "/data/city/sequences/00"},
+      {"mode", "mono"},
+      {"frames", 100},
+      {"first_frame", 0},
+      {"tracked", 98},
+      {"keyframes", 20},
+      {"points", 5000},
+      {"loops", 1},
+      {"relocalizations", 2},
+      {"resets", 0},
+      {"seconds", 5.0},
+      {"ate_rmse", 0.25},
+      {"ate_alignment", "sim3"},
+      {"ate_matched", 98},
+      {"path_length_m", 100.0},
+      {"classes", {{"road", 2000}, {"building", 2500}, {"car", 400}, {"unlabeled", 100}}},
+      {"segmentation",
+       {{"segmenter", "truth-noisy labels"},
+        {"segmented_keyframes", 20},
+        {"segmented_frames", 60},
+        {"median_ms", 40.0}}},
+      {"label_accuracy", 0.96},
+      {"label_evaluation",
+       {{"fused_points",
+         {{"accuracy", 0.96},
+          {"evaluated", 4900},
+          {"per_class", {{"road", {{"accuracy", 0.97}, {"evaluated", 2000}}}}}}},
+        {"single_frame_keypoints", {{"accuracy", 0.75}, {"evaluated", 9000}}}}},
+      {"geo",
+       {{"georeferenced", true},
+        {"fused", true},
+        {"gps_fixes", 100},
+        {"gps_format", "oxts"},
+        {"gps_samples", 4},
+        {"gps_inliers", 4},
+        {"single_sim3_rmse_m", 1.5},
+        {"fused_rmse_m", 1.2},
+        {"metres_per_map_unit", 30.0},
+        {"landmarks", 2},
+        {"landmarks_associated", 2},
+        {"topology_nodes", 3},
+        {"topology_edges", 2},
+        {"objects", 3}}},
+      {"geo_evaluation",
+       {{"landmark_error_median_m", 0.8},
+        {"landmark_error_max_m", 1.4},
+        {"landmark_errors", {{{"name", "Town Hall"}, {"error_m", 0.8}, {"horizontal_m", 0.5}}}}}},
+  };
+}
+
+json TimingJson() {
+  auto module = [](int count, double median) {
+    return json{{"count", count},         {"median_ms", median},  {"mean_ms", median * 1.1},
+                {"p95_ms", median * 2.0}, {"max_ms", median * 3}, {"total_ms", median * count}};
+  };
+  return {{"tracking", module(100, 25.0)},
+          {"orb_extraction", module(100, 15.0)},
+          {"label_fusion", module(60, 0.04)},
+          {"local_mapping", module(20, 200.0)},
+          {"loop_closing", module(19, 0.5)}};
+}
+
+std::vector<SemanticPoint> MapPoints(int count) {
+  std::vector<SemanticPoint> points;
+  for (int i = 0; i < count; ++i) {
+    SemanticPoint p;
+    p.position = Eigen::Vector3d(0.01 * i, -0.5 + 0.001 * (i % 100), 0.02 * i);
+    p.label = i % 50 == 0 ? kNoLabel : (i % 3 == 0 ? 0 : (i % 3 == 1 ? 2 : 13));
+    p.confidence = 0.9f;
+    p.observations = 3;
+    points.push_back(p);
+  }
+  return points;
+}
+
+Trajectory Poses(int count) {
+  Trajectory trajectory;
+  for (int i = 0; i < count; ++i) {
+    trajectory.push_back(
+        {0.1 * i, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.0, 0.5 * i))});
+  }
+  return trajectory;
+}
+
+json LandmarksGeoJson() {
+  auto feature = [](const std::string& name, double lon, double lat, bool associated) {
+    json properties = {{"name", name},
+                       {"category", "civic"},
+                       {"map_xyz", {1.0, -0.2, 3.0}},
+                       {"membership", 0.5},
+                       {"sigma_m", 25.0}};
+    if (associated) {
+      properties["nearest_keyframe"] = {{"keyframe_id", 7}, {"frame_index", 35}, {"distance_m", 29.4}};
+    }
+    return json{{"type", "Feature"},
+                {"geometry", {{"type", "Point"}, {"coordinates", {lon, lat, 100.0}}}},
+                {"properties", properties}};
+  };
+  return {{"type", "FeatureCollection"},
+          {"features",
+           {feature("Town Hall", 8.4, 49.0, true), feature(std::string(kTrickyName), 8.41, 49.01, false)}}};
+}
+
+json ObjectsJson() {
+  json objects = json::array();
+  for (int i = 0; i < 3; ++i) {
+    objects.push_back({{"id", i},
+                       {"class", i == 0 ? "building" : "car"},
+                       {"num_points", 40 + i},
+                       {"size_m", {4.0, 2.0, 1.5}},
+                       {"centroid_map", {0.1 * i, 0.0, 1.0}},
+                       {"centroid_enu", {3.0 * i, 1.0, 0.0}},
+                       {"centroid_wgs84", {{"lat", 49.0}, {"lon", 8.4}, {"alt", 100.0}}},
+                       {"mean_confidence", 0.9}});
+  }
+  return {{"format", "semslam-objects"}, {"num_objects", 3}, {"objects", objects}};
+}
+
+void WriteJson(const fs::path& file, const json& value) { WriteFileAtomically(file, value.dump(1)); }
+
+// A run folder with every input the report reads.
+void WriteFullRun(const fs::path& dir, int points = 5000, int poses = 100) {
+  WriteJson(dir / "run.json", RunJson());
+  WriteJson(dir / "timing.json", TimingJson());
+  WriteSemanticPly(dir / "semantic_map.ply", MapPoints(points));
+  WriteTumTrajectory(dir / "trajectory.tum", Poses(poses));
+  WriteTumTrajectory(dir / "keyframes.tum", Poses(poses / 5));
+  WriteJson(dir / "landmarks.geojson", LandmarksGeoJson());
+  WriteJson(dir / "objects.json", ObjectsJson());
+  cv::Mat image(40, 60, CV_8UC3, cv::Scalar(255, 255, 255));
+  WritePlot(dir / "plots" / "gps.png", image);
+  WritePlot(dir / "plots" / "topology.png", image);
+}
+
+TEST(HtmlEncoding, Base64MatchesRfc4648) {
+  EXPECT_EQ(Base64Encode(std::string_view("")), "");
+  EXPECT_EQ(Base64Encode(std::string_view("f")), "Zg==");
+  EXPECT_EQ(Base64Encode(std::string_view("fo")), "Zm8=");
+  EXPECT_EQ(Base64Encode(std::string_view("foo")), "Zm9v");
+  EXPECT_EQ(Base64Encode(std::string_view("foob")), "Zm9vYg==");
+  EXPECT_EQ(Base64Encode(std::string_view("fooba")), "Zm9vYmE=");
+  EXPECT_EQ(Base64Encode(std::string_view("foobar")), "Zm9vYmFy");
+  const std::string binary("\x00\xff\x10\x80\x7f", 5);
+  EXPECT_EQ(Base64Decode(Base64Encode(binary)), binary);
+}
+
+TEST(HtmlEncoding, EscapesHtmlAndScriptJson) {
+  EXPECT_EQ(HtmlEscape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+  const json value = {{"name", "</script><!-- x"}};
+  const std::string safe = JsonForScriptElement(value.dump());
+  EXPECT_EQ(safe.find('<'), std::string::npos);
+  EXPECT_EQ(json::parse(safe), value);
+}
+
+TEST(HtmlReport, FullRunHasEverySection) {
+  const TempDir dir;
+  WriteFullRun(dir.path());
+  const HtmlReportResult result = WriteHtmlReport(dir.path());
+  EXPECT_EQ(result.path, dir.path() / "report.html");
+  ASSERT_TRUE(fs::exists(result.path));
+  EXPECT_EQ(result.bytes, fs::file_size(result.path));
+  EXPECT_EQ(result.sections, (std::vector<std::string>{"summary", "time-analysis", "modules", "map3d",
+                                                       "plots", "landmarks", "objects"}));
+  EXPECT_TRUE(result.notes.empty());
+  EXPECT_EQ(result.map_points, 5000u);
+  EXPECT_EQ(result.points_shown, 5000u);
+
+  const std::string html = ReadText(result.path);
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("</html>"), std::string::npos);
+  for (const std::string& id : result.sections) {
+    EXPECT_NE(html.find("<section id=\"" + id + "\">"), std::string::npos) << id;
+    EXPECT_NE(html.find("href=\"#" + id + "\""), std::string::npos) << id;
+  }
+  EXPECT_NE(html.find("<title>semslam report: 00</title>"), std::string::npos);
+  // Summary figures.
+  const std::string summary = Between(html, "<section id=\"summary\">", "</section>");
+  EXPECT_NE(summary.find("/data/city/sequences/00"), std::string::npos);
+  EXPECT_NE(summary.find("98 (98.0&nbsp;%)"), std::string::npos);
+  EXPECT_NE(summary.find("0.25&nbsp;m RMSE (Sim(3) alignment"), std::string::npos);
+  EXPECT_NE(summary.find("96.0&nbsp;%"), std::string::npos);
+  EXPECT_NE(summary.find("Landmark position error"), std::string::npos);
+  // The landmark's error from run.json is matched to its row by name.
+  const std::string landmarks = Between(html, "<section id=\"landmarks\">", "</section>");
+  EXPECT_NE(landmarks.find("0.80&nbsp;m (0.50&nbsp;m horiz.)"), std::string::npos);
+  EXPECT_NE(landmarks.find("29.4&nbsp;m"), std::string::npos);
+  // Two plots, embedded as PNG.
+  size_t images = 0;
+  for (size_t at = html.find("data:image/png;base64,"); at != std::string::npos;
+       at = html.find("data:image/png;base64,", at + 1)) {
+    ++images;
+    const size_t begin = at + std::string_view("data:image/png;base64,").size();
+    EXPECT_EQ(Base64Decode(html.substr(begin, 12)).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  }
+  EXPECT_EQ(images, 2u);
+  // Self-contained: nothing is fetched from anywhere.
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_EQ(html.find("@import"), std::string::npos);
+  // Written atomically: no temporary file left beside it.
+  for (const auto& entry : fs::directory_iterator(dir.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "report.html" || name == "plots" || fs::path(name).has_extension()) << name;
+    EXPECT_EQ(name.find("tmp"), std::string::npos) << name;
+  }
+}
+
+TEST(HtmlReport, TimeAnalysisHasThePapersTableI) {
+  const TempDir dir;
+  WriteFullRun(dir.path());
+  WriteHtmlReport(dir.path());
+  const std::string html = ReadText(dir.path() / "report.html");
+  const std::string table = Between(html, "<table class=\"data\" id=\"table-i\">", "</table>");
+  ASSERT_FALSE(table.empty());
+  // The paper's figures.
+  EXPECT_NE(table.find("1.8 Hz (PSPNet-101)"), std::string::npos);
+  EXPECT_NE(table.find("15.1 Hz (ORB-SLAM2)"), std::string::npos);
+  EXPECT_NE(table.find("0.5 ms"), std::string::npos);
+  // This run's: tracking median 25 ms -> 40 Hz; segmentation 40 ms from run.json -> 25 Hz; label fusion 0.04
+  // ms; the whole system 100 frames in 5 s -> 20 Hz.
+  const std::string tracking = Between(table, "<td>Tracking", "</tr>");
+  EXPECT_NE(tracking.find(">25.0<"), std::string::npos) << tracking;
+  EXPECT_NE(tracking.find(">50.0<"), std::string::npos) << tracking;  // p95
+  EXPECT_NE(tracking.find(">40.0<"), std::string::npos) << tracking;
+  const std::string segmentation = Between(table, "<td>Semantic segmentation", "</tr>");
+  EXPECT_NE(segmentation.find(">40.0<"), std::string::npos) << segmentation;
+  EXPECT_NE(segmentation.find(">25.0<"), std::string::npos) << segmentation;
+  const std::string fusion = Between(table, "<td>Data association", "</tr>");
+  EXPECT_NE(fusion.find(">0.040<"), std::string::npos) << fusion;
+  const std::string whole = Between(table, "<td>Whole system", "</tr>");
+  EXPECT_NE(whole.find(">20.0<"), std::string::npos) << whole;
+  EXPECT_NE(Between(table, "<td>Local mapping", "</tr>").find(">200<"), std::string::npos);
+  EXPECT_NE(Between(table, "<td>Loop closing", "</tr>").find(">0.500<"), std::string::npos);
+  // Every module of timing.json in the full table.
+  const std::string modules = Between(html, "<section id=\"modules\">", "</section>");
+  const json timing = TimingJson();
+  for (const auto& [name, entry] : timing.items()) {
+    EXPECT_NE(modules.find("<code>" + name + "</code>"), std::string::npos) << name;
+  }
+}
+
+TEST(HtmlReport, EmbeddedDataParsesAndHoldsEveryPoint) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 3000, 50);
+  WriteHtmlReport(dir.path());
+  const json data = EmbeddedData(ReadText(dir.path() / "report.html"));
+  ASSERT_TRUE(data.is_object());
+  const json& points = data.at("points");
+  EXPECT_EQ(points.at("total").get<size_t>(), 3000u);
+  EXPECT_EQ(points.at("count").get<size_t>(), 3000u);
+  const std::vector<float> xyz = DecodeFloats(points.at("positions_b64").get<std::string>());
+  const std::string labels = Base64Decode(points.at("labels_b64").get<std::string>());
+  ASSERT_EQ(xyz.size(), 3u * 3000u);
+  ASSERT_EQ(labels.size(), 3000u);
+
+  // The same points with the same labels (in label order).
+  std::multiset<std::tuple<float, float, float, int>> expected, got;
+  for (const SemanticPoint& p : MapPoints(3000)) {
+    expected.insert({static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
+                     static_cast<float>(p.position.z()), p.label});
+  }
+  for (size_t i = 0; i < labels.size(); ++i) {
+    got.insert({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], static_cast<unsigned char>(labels[i])});
+  }
+  EXPECT_EQ(got, expected);
+
+  // Class ranges cover the points in order, one contiguous range per label.
+  size_t next = 0;
+  std::set<int> seen;
+  for (const json& range : points.at("class_ranges")) {
+    const int label = range.at(0).get<int>();
+    const size_t first = range.at(1).get<size_t>(), count = range.at(2).get<size_t>();
+    EXPECT_EQ(first, next);
+    EXPECT_TRUE(seen.insert(label).second) << label;
+    for (size_t i = first; i < first + count; ++i) ASSERT_EQ(static_cast<unsigned char>(labels[i]), label);
+    next = first + count;
+  }
+  EXPECT_EQ(next, 3000u);
+  EXPECT_EQ(seen, (std::set<int>{0, 2, 13, kNoLabel}));
+
+  // The legend's classes: 19 and "unlabeled", counts matching the map.
+  const json& classes = data.at("classes");
+  ASSERT_EQ(classes.size(), static_cast<size_t>(kNumClasses + 1));
+  std::uint64_t total = 0;
+  for (const json& c : classes) total += c.at("map_count").get<std::uint64_t>();
+  EXPECT_EQ(total, 3000u);
+  EXPECT_EQ(classes.at(13).at("name"), "car");
+  EXPECT_EQ(classes.at(13).at("color"), json({0, 0, 142}));
+  EXPECT_EQ(classes.back().at("id").get<int>(), kNoLabel);
+  EXPECT_EQ(classes.back().at("map_count").get<int>(), 60);
+
+  // Trajectory, keyframes, landmarks and a sensible initial view.
+  EXPECT_EQ(data.at("trajectory").at("count").get<int>(), 50);
+  const std::vector<float> trajectory =
+      DecodeFloats(data.at("trajectory").at("positions_b64").get<std::string>());
+  ASSERT_EQ(trajectory.size(), 150u);
+  EXPECT_FLOAT_EQ(trajectory[3 * 49 + 2], 24.5f);
+  EXPECT_EQ(data.at("keyframes").at("count").get<int>(), 10);
+  ASSERT_EQ(data.at("landmarks").size(), 2u);
+  EXPECT_EQ(data.at("landmarks").at(1).at("name").get<std::string>(), kTrickyName);
+  EXPECT_GT(data.at("view").at("radius").get<double>(), 1.0);
+}
+
+TEST(HtmlReport, SubsamplesToMaxPointsReproducibly) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 5000, 100);
+  HtmlReportOptions options;
+  options.max_points = 1200;
+  options.max_trajectory_poses = 10;
+  const HtmlReportResult result = WriteHtmlReport(dir.path(), options);
+  EXPECT_EQ(result.map_points, 5000u);
+  EXPECT_EQ(result.points_shown, 1200u);
+  EXPECT_EQ(result.trajectory_poses, 10u);
+  const std::string first = ReadText(result.path);
+  const json data = EmbeddedData(first);
+  EXPECT_EQ(data.at("points").at("count").get<size_t>(), 1200u);
+  EXPECT_EQ(data.at("points").at("total").get<size_t>(), 5000u);
+  const std::vector<float> xyz = DecodeFloats(data.at("points").at("positions_b64").get<std::string>());
+  ASSERT_EQ(xyz.size(), 3u * 1200u);
+  // A subset of the map without repeats, from all over it (not just its first points).
+  std::set<std::tuple<float, float, float>> all, chosen;
+  for (const SemanticPoint& p : MapPoints(5000)) {
+    all.insert({static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
+                static_cast<float>(p.position.z())});
+  }
+  float max_x = 0;
+  for (size_t i = 0; i < 1200; ++i) {
+    const std::tuple<float, float, float> p{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+    EXPECT_TRUE(all.count(p)) << i;
+    chosen.insert(p);
+    max_x = std::max(max_x, xyz[3 * i]);
+  }
+  EXPECT_EQ(chosen.size(), 1200u);
+  EXPECT_GT(max_x, 40.0f);
+  // The legend keeps the map's counts and says how many are shown.
+  std::uint64_t shown = 0, map = 0;
+  for (const json& c : data.at("classes")) {
+    shown += c.at("shown").get<std::uint64_t>();
+    map += c.at("map_count").get<std::uint64_t>();
+  }
+  EXPECT_EQ(shown, 1200u);
+  EXPECT_EQ(map, 5000u);
+  // The trajectory is thinned evenly, keeping both ends.
+  const std::vector<float> trajectory =
+      DecodeFloats(data.at("trajectory").at("positions_b64").get<std::string>());
+  ASSERT_EQ(trajectory.size(), 30u);
+  EXPECT_FLOAT_EQ(trajectory[2], 0.0f);
+  EXPECT_FLOAT_EQ(trajectory[29], 49.5f);
+
+  // Same options, same bytes; another seed, another subset.
+  WriteHtmlReport(dir.path(), options);
+  EXPECT_EQ(ReadText(result.path), first);
+  options.seed = 2;
+  WriteHtmlReport(dir.path(), options);
+  EXPECT_NE(EmbeddedData(ReadText(result.path)).at("points").at("positions_b64"),
+            data.at("points").at("positions_b64"));
+
+  // No points at all: the view keeps the trajectory.
+  options.max_points = 0;
+  const HtmlReportResult none = WriteHtmlReport(dir.path(), options);
+  EXPECT_EQ(none.points_shown, 0u);
+  const json empty = EmbeddedData(ReadText(result.path));
+  EXPECT_EQ(empty.at("points").at("count").get<int>(), 0);
+  EXPECT_EQ(empty.at("trajectory").at("count").get<int>(), 10);
+}
+
+TEST(HtmlReport, MissingOptionalInputsLeaveTheirSectionsOut) {
+  const TempDir dir;
+  WriteJson(dir.path() / "run.json",
+            {{"sequence", "/x/07"}, {"mode", "stereo"}, {"frames", 10}, {"tracked", 10}});
+  const HtmlReportResult result = WriteHtmlReport(dir.path());
+  EXPECT_EQ(result.sections, (std::vector<std::string>{"summary", "time-analysis", "notes"}));
+  EXPECT_EQ(result.map_points, 0u);
+  const std::string html = ReadText(result.path);
+  EXPECT_EQ(html.find(kDataOpen), std::string::npos);
+  EXPECT_EQ(html.find("id=\"map3d\""), std::string::npos);
+  EXPECT_EQ(html.find("id=\"plots\""), std::string::npos);
+  EXPECT_EQ(html.find("id=\"landmarks\""), std::string::npos);
+  EXPECT_EQ(html.find("id=\"objects\""), std::string::npos);
+  EXPECT_EQ(html.find("Trajectory error"), std::string::npos);  // no ATE in run.json
+  EXPECT_EQ(html.find("Label accuracy"), std::string::npos);
+  const std::string notes = Between(html, "<section id=\"notes\">", "</section>");
+  for (const char* file : {"timing.json", "semantic_map.ply", "trajectory.tum", "keyframes.tum"}) {
+    EXPECT_NE(notes.find(file), std::string::npos) << file;
+  }
+
+  // Only a trajectory: the 3D view, without map points.
+  WriteTumTrajectory(dir.path() / "trajectory.tum", Poses(20));
+  const HtmlReportResult with_trajectory = WriteHtmlReport(dir.path());
+  EXPECT_EQ(with_trajectory.sections,
+            (std::vector<std::string>{"summary", "time-analysis", "map3d", "notes"}));
+  const json data = EmbeddedData(ReadText(with_trajectory.path));
+  EXPECT_FALSE(data.contains("points"));
+  EXPECT_FALSE(data.contains("keyframes"));
+  EXPECT_EQ(data.at("trajectory").at("count").get<int>(), 20);
+}
+
+TEST(HtmlReport, MissingRunJsonIsAnInputErrorNamingIt) {
+  const TempDir dir;
+  WriteTumTrajectory(dir.path() / "trajectory.tum", Poses(5));
+  try {
+    WriteHtmlReport(dir.path());
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().file, dir.path() / "run.json");
+    EXPECT_NE(std::string(e.what()).find("run.json"), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "report.html"));
+}
+
+TEST(HtmlReport, MalformedInputsAreInputErrorsNamingFileAndField) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 100, 10);
+  auto expect_error = [&](const fs::path& file, const std::string& text, const std::string& fragment) {
+    const std::string original = ReadText(file);
+    WriteFileAtomically(file, text);
+    try {
+      WriteHtmlReport(dir.path());
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.where().file, file);
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+    WriteFileAtomically(file, original);
+  };
+  expect_error(dir.path() / "run.json", "{\"frames\": 10,", "json");
+  expect_error(dir.path() / "run.json", "[1, 2]", "expected a JSON object");
+  expect_error(dir.path() / "run.json", R"({"frames": "many"})", "frames");
+  expect_error(dir.path() / "run.json", R"({"geo": {"gps_fixes": 1.5, "georeferenced": true}})",
+               "geo.gps_fixes");
+  expect_error(dir.path() / "timing.json", R"({"tracking": {"count": 3}})", "tracking.median_ms");
+  expect_error(dir.path() / "landmarks.geojson", R"({"features": [{"properties": {"name": 3}}]})",
+               "features[0].properties.name");
+  expect_error(dir.path() / "objects.json", R"({"objects": [{"id": 0, "size_m": [1, 2]}]})",
+               "objects[0].size_m");
+  expect_error(dir.path() / "plots" / "gps.png", "not an image", "not a PNG");
+  expect_error(dir.path() / "trajectory.tum", "0 1 2 3\n", "trajectory.tum");
+  // Restored, the folder gives a report again.
+  EXPECT_NO_THROW(WriteHtmlReport(dir.path()));
+}
+
+TEST(HtmlReport, EscapesNamesAndLimitsTables) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 100, 10);
+  HtmlReportOptions options;
+  options.max_table_rows = 1;
+  options.max_plot_bytes = 10;  // every plot is larger
+  const HtmlReportResult result = WriteHtmlReport(dir.path(), options);
+  const std::string html = ReadText(result.path);
+  // The landmark called "Café </script><b>&" is text in the table and a string in the data, never markup.
+  EXPECT_EQ(html.find("</script><b>"), std::string::npos);
+  EXPECT_NE(html.find("Caf\xC3\xA9 &lt;/script&gt;&lt;b&gt;&amp;"), std::string::npos);
+  // One object row of three.
+  const std::string objects = Between(html, "<section id=\"objects\">", "</section>");
+  EXPECT_NE(objects.find("3 objects: 1 building, 2 car"), std::string::npos) << objects;
+  EXPECT_NE(objects.find("2 more objects"), std::string::npos);
+  EXPECT_NE(objects.find("centroid (ENU, m)"), std::string::npos);
+  // The plots are too large: left out, and said so.
+  EXPECT_EQ(html.find("data:image/png"), std::string::npos);
+  EXPECT_EQ(std::count(result.sections.begin(), result.sections.end(), "plots"), 0);
+  ASSERT_EQ(result.notes.size(), 2u);
+  EXPECT_NE(result.notes[0].find("plots/gps.png"), std::string::npos);
+  EXPECT_NE(html.find("max_plot_bytes"), std::string::npos);
+}
+
+TEST(HtmlReport, OptionsAreChecked) {
+  HtmlReportOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.max_trajectory_poses = 1;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  options = {};
+  options.max_plot_bytes = 0;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  const TempDir dir;
+  WriteFullRun(dir.path(), 10, 10);
+  EXPECT_THROW(WriteHtmlReport(dir.path(), options), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace semslam
