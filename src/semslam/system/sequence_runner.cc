@@ -14,6 +14,7 @@
 #include "semslam/io/trajectory_io.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
+#include "semslam/report/html_report.h"
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
@@ -233,6 +234,9 @@ RunSummary RunSequence(const RunOptions& options) {
   run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
   WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
+  const HtmlReportResult report = WriteHtmlReport(options.output);
+  spdlog::info("report: {} ({} of {} map points shown)", report.path.string(), report.points_shown,
+               report.map_points);
   return summary;
 }
 
