@@ -267,8 +267,20 @@ cv::Mat RenderTopologyPlot(const TopologicalMap& map, const PlotOptions& options
 cv::Mat RenderSemanticMapPlot(const Points3d& points_enu, const std::vector<int>& labels,
                               const Points3d& trajectory_enu, const PlotOptions& options) {
   Require(labels.size() == points_enu.size(), "semantic map plot: one label per point");
-  std::vector<Eigen::Vector2d> all = Horizontal(points_enu);
-  Append(all, Horizontal(trajectory_enu));
+  // Framed by the trajectory and the points near it: a few far, badly triangulated points would otherwise
+  // shrink the map into a corner.
+  constexpr double kMarginM = 60.0;
+  std::vector<Eigen::Vector2d> all = Horizontal(trajectory_enu);
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const auto& p : all) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  for (const Eigen::Vector2d& p : Horizontal(points_enu)) {
+    const bool near = all.empty() || ((p.array() >= lo.array() - kMarginM).all() &&
+                                      (p.array() <= hi.array() + kMarginM).all());
+    if (near) all.push_back(p);
+  }
   const TopView view(all, options);
   cv::Mat image = view.NewImage();
   std::set<int> present;
