@@ -35,8 +35,8 @@ using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
 // Bounds, measured on the development machine (seed 1; seeds 2 and 3 for the spread) with a margin of 3-5x.
-// Monocular ATE after Sim(3) alignment, as a fraction of the path length: measured 0.05 % (0.106 m over 202 m;
-// seeds 2 and 3: 0.128 m and 0.033 m).
+// Monocular ATE after Sim(3) alignment, as a fraction of the path length: measured 0.05 % (0.106 m over 202
+// m; seeds 2 and 3: 0.128 m and 0.033 m).
 constexpr double kMonoAteFractionOfPath = 0.0025;
 // Stereo ATE after SE(3) alignment: measured 0.065 m (seeds 2, 3: 0.057 m, 0.033 m); Sim(3) scale 1.0012.
 constexpr double kStereoAteM = 0.25;
@@ -373,8 +373,9 @@ TEST_F(SyntheticRun, GpsLandmarksTopologyObjectsAndPlots) {
   EXPECT_GE(geo.value("objects", 0), 10);
   const nlohmann::json& ge = j["geo_evaluation"];
   EXPECT_EQ(ge.value("landmarks", 0), 8);
-  // Measured (seeds 1, 2, 3): median 3.86, 2.36, 1.73 m in 3-D and 1.33, 0.84, 0.68 m horizontally; trajectory
-  // 1.61, 1.32, 0.77 m RMSE. The error is mostly the noise of the 7 GPS samples (1 m, every 30 frames).
+  // Measured (seeds 1, 2, 3): median 3.86, 2.36, 1.73 m in 3-D and 1.33, 0.84, 0.68 m horizontally;
+  // trajectory 1.61, 1.32, 0.77 m RMSE. The error is mostly the noise of the 7 GPS samples (1 m, every 30
+  // frames).
   EXPECT_LE(ge["landmark_error_median_m"].get<double>(), 6.0);
   EXPECT_LE(ge["landmark_error_horizontal_median_m"].get<double>(), 3.0);
   const double geo_ate = ge["trajectory_ate_rmse_m"].get<double>();
