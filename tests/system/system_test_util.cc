@@ -1,0 +1,246 @@
+#include "system_test_util.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "support/test_support.h"
+
+extern char** environ;
+
+namespace semslam::system_test {
+
+std::string CommandResult::Describe() const {
+  std::ostringstream s;
+  s << "`" << command << "` ";
+  if (signal != 0) {
+    s << "was killed by signal " << signal << " (" << strsignal(signal) << ")";
+  } else {
+    s << "exited with " << exit_code;
+  }
+  const std::string tail = err.size() > 2000 ? "..." + err.substr(err.size() - 2000) : err;
+  s << "; stderr:\n" << tail;
+  return s.str();
+}
+
+CommandResult RunSemslam(const std::vector<std::string>& args) {
+  CommandResult result;
+  const std::string binary = testing::SemslamBinary().string();
+  std::vector<std::string> argv_strings = {binary};
+  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+  for (const std::string& a : argv_strings) {
+    result.command += (result.command.empty() ? "" : " ");
+    result.command += a.find_first_of(" '\"") == std::string::npos ? a : "'" + a + "'";
+  }
+  std::vector<char*> argv;
+  for (std::string& a : argv_strings) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  testing::TempDir dir;
+  const std::string out_path = (dir / "stdout.txt").string();
+  const std::string err_path = (dir / "stderr.txt").string();
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = 0;
+  const int spawn_error = posix_spawn(&pid, binary.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawn_error != 0) {
+    result.err = std::string("cannot start: ") + std::strerror(spawn_error);
+    return result;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      result.err = std::string("waitpid: ") + std::strerror(errno);
+      return result;
+    }
+  }
+  if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
+  result.out = ReadText(out_path);
+  result.err = ReadText(err_path);
+  return result;
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+nlohmann::json ReadJson(const fs::path& path) {
+  const std::string text = ReadText(path);
+  if (text.empty()) return nlohmann::json();
+  return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+bool SameBytes(const fs::path& a, const fs::path& b) {
+  std::error_code ec_a, ec_b;
+  if (fs::file_size(a, ec_a) != fs::file_size(b, ec_b) || ec_a || ec_b) return false;
+  return ReadText(a) == ReadText(b);
+}
+
+namespace {
+
+std::string BinaryIdentity() {
+  const fs::path binary = testing::SemslamBinary();
+  std::error_code ec;
+  const auto size = fs::file_size(binary, ec);
+  const auto time = fs::last_write_time(binary, ec).time_since_epoch().count();
+  return binary.string() + "|" + std::to_string(size) + "|" + std::to_string(time);
+}
+
+class FileLock {
+ public:
+  explicit FileLock(const fs::path& path) : fd_(open(path.c_str(), O_RDWR | O_CREAT, 0644)) {
+    if (fd_ >= 0) {
+      while (flock(fd_, LOCK_EX) != 0 && errno == EINTR) {
+      }
+    }
+  }
+  ~FileLock() {
+    if (fd_ >= 0) close(fd_);  // releases the lock
+  }
+  FileLock(const FileLock&) = delete;
+  FileLock& operator=(const FileLock&) = delete;
+
+ private:
+  int fd_;
+};
+
+constexpr const char* kErrorFile = "ARTIFACT_ERROR.txt";
+
+}  // namespace
+
+Artifact SharedArtifact(const std::string& name, const std::vector<std::string>& recipe,
+                        const std::function<std::string(const fs::path& dir)>& make) {
+  std::string key = BinaryIdentity();
+  for (const std::string& r : recipe) key += "|" + r;
+  std::ostringstream hash;
+  hash << std::hex << std::hash<std::string>{}(key);
+  const char* env = std::getenv("SEMSLAM_SYSTEM_TEST_CACHE");
+  const fs::path root = env != nullptr && *env != '\0' ? fs::path(env) : fs::path(SEMSLAM_SYSTEM_TEST_CACHE);
+  fs::create_directories(root);
+  const fs::path dir = root / (name + "-" + hash.str());
+  const FileLock lock(root / (name + ".lock"));
+  Artifact artifact;
+  artifact.dir = dir;
+  if (!fs::exists(dir)) {
+    // Older versions of this artifact (another binary or recipe) go first: they are large.
+    for (const auto& entry : fs::directory_iterator(root)) {
+      const std::string file = entry.path().filename().string();
+      if (entry.is_directory() && file.rfind(name + "-", 0) == 0 && entry.path() != dir) {
+        fs::remove_all(entry.path());
+      }
+    }
+    const fs::path partial = root / (name + "-" + hash.str() + ".partial");
+    fs::remove_all(partial);
+    fs::create_directories(partial);
+    std::string error;
+    try {
+      error = make(partial);
+    } catch (const std::exception& e) {
+      error = std::string("exception: ") + e.what();
+    }
+    if (!error.empty()) std::ofstream(partial / kErrorFile) << error;
+    fs::rename(partial, dir);
+  }
+  if (fs::exists(dir / kErrorFile)) {
+    artifact.error = name + " could not be made (cached for this binary): " + ReadText(dir / kErrorFile);
+  }
+  return artifact;
+}
+
+namespace {
+
+Artifact Synthetic(const std::string& name, int frames) {
+  const std::vector<std::string> args = {"synth", "--frames", std::to_string(frames), "--seed", "1", "-q"};
+  return SharedArtifact(name, args, [&](const fs::path& dir) -> std::string {
+    std::vector<std::string> full = args;
+    full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
+    const CommandResult r = RunSemslam(full);
+    return r.Succeeded() ? "" : r.Describe();
+  });
+}
+
+// A `semslam run` of `dataset` with extra arguments, into <artifact>/out.
+Artifact Run(const std::string& name, const Artifact& dataset, const std::vector<std::string>& extra) {
+  if (!dataset.ok()) return {{}, dataset.error};
+  const fs::path data = dataset.dir / "dataset";
+  std::vector<std::string> args = {"run", "--sequence", SequenceDir(data).string(), "-q"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  Artifact run = SharedArtifact(name, args, [&](const fs::path& dir) -> std::string {
+    std::vector<std::string> full = args;
+    full.insert(full.end(), {"--out", (dir / "out").string()});
+    const CommandResult r = RunSemslam(full);
+    std::ofstream(dir / "stdout.txt") << r.out;
+    std::ofstream(dir / "stderr.txt") << r.err;
+    return r.Succeeded() ? "" : r.Describe();
+  });
+  if (run.ok()) run.dir /= "out";
+  return run;
+}
+
+}  // namespace
+
+Artifact SyntheticDataset() {
+  Artifact a = Synthetic("city200", kSyntheticFrames);
+  if (a.ok()) a.dir /= "dataset";
+  return a;
+}
+
+Artifact TinyDataset() {
+  Artifact a = Synthetic("city6", 6);
+  if (a.ok()) a.dir /= "dataset";
+  return a;
+}
+
+Artifact MonoRun() {
+  const Artifact raw = Synthetic("city200", kSyntheticFrames);
+  if (!raw.ok()) return raw;
+  const fs::path data = raw.dir / "dataset";
+  return Run("mono_run", raw,
+             {"--mode", "mono", "--pacing", "synchronous", "--segmenter", "truth-noisy:0.25", "--gps",
+              (data / "oxts").string(), "--landmarks", (data / "landmarks.csv").string()});
+}
+
+Artifact StereoRun() {
+  return Run("stereo_run", Synthetic("city200", kSyntheticFrames),
+             {"--mode", "stereo", "--pacing", "synchronous"});
+}
+
+Artifact TinyStereoRun() {
+  return Run("tiny_stereo_run", Synthetic("city6", 6), {"--mode", "stereo", "--pacing", "synchronous"});
+}
+
+std::vector<int> FrameIndices(const std::vector<double>& timestamps, const std::vector<double>& times) {
+  std::vector<int> indices;
+  for (const double t : timestamps) {
+    const auto it = std::lower_bound(times.begin(), times.end(), t - 1e-3);
+    indices.push_back(it != times.end() && std::abs(*it - t) <= 1e-3 ? static_cast<int>(it - times.begin())
+                                                                     : -1);
+  }
+  return indices;
+}
+
+}  // namespace semslam::system_test

@@ -1,0 +1,92 @@
+#pragma once
+// Helpers of the end-to-end tests: running the `semslam` binary (arguments passed as they are, no shell),
+// reading what it wrote, and the datasets and runs that several tests share.
+//
+// CTest runs every test in a process of its own (and two at a time with -j2), so what several tests need is
+// made once into a cache directory under the build tree, keyed by the semslam binary (size and modification
+// time) and the exact command, under a file lock: the first test to need it makes it, the others wait and
+// reuse it, and a rebuilt binary makes it again. SEMSLAM_SYSTEM_TEST_CACHE overrides the cache directory.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace semslam::system_test {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;  // when the process exited
+  int signal = 0;      // when a signal ended it (a crash)
+  std::string out;     // stdout
+  std::string err;     // stderr
+  std::string command;
+
+  bool Crashed() const { return signal != 0; }
+  bool Succeeded() const { return signal == 0 && exit_code == 0; }
+  // For failure messages: the command, how it ended and the end of its stderr.
+  std::string Describe() const;
+};
+
+// Runs `semslam args...` with stdout and stderr captured (through files in a temporary directory).
+CommandResult RunSemslam(const std::vector<std::string>& args);
+
+std::string ReadText(const fs::path& path);
+nlohmann::json ReadJson(const fs::path& path);
+// The lines of a text (a last line without '\n' counts; an empty text has none).
+std::vector<std::string> Lines(const std::string& text);
+bool SameBytes(const fs::path& a, const fs::path& b);
+
+// A shared, cached result: `dir` when it was made, else `error` says why not.
+struct Artifact {
+  fs::path dir;
+  std::string error;
+  bool ok() const { return error.empty(); }
+};
+
+// Makes (once per binary and recipe) a directory with `make(dir)`, which returns "" on success or what went
+// wrong (a failure is cached too, so that tests sharing a broken run fail fast with the same message).
+Artifact SharedArtifact(const std::string& name, const std::vector<std::string>& recipe,
+                        const std::function<std::string(const fs::path& dir)>& make);
+
+// `semslam synth --out DIR --frames 200 --seed 1`: the synthetic city, 200 frames (~200 m, one left turn,
+// eight landmarks, GPS every frame with 1 m noise).
+constexpr int kSyntheticFrames = 200;
+Artifact SyntheticDataset();
+// A 6-frame synthetic dataset (fixtures for bad inputs).
+Artifact TinyDataset();
+// `semslam run --sequence D --mode mono --pacing synchronous --segmenter truth-noisy:0.25 --gps D/oxts
+// --landmarks D/landmarks.csv` over the 200-frame city: the one monocular run of the suite (SLAM, semantics,
+// GPS and landmarks; semantics and geography come after tracking and do not change it).
+Artifact MonoRun();
+// `semslam run --sequence D --mode stereo --pacing synchronous` over the 200-frame city.
+Artifact StereoRun();
+
+// `semslam run --mode stereo --pacing synchronous` over the 6-frame dataset (a small map.semslam).
+Artifact TinyStereoRun();
+
+// The sequence folder of a synthetic dataset.
+inline fs::path SequenceDir(const fs::path& dataset) { return dataset / "sequences" / "00"; }
+
+// Frame index of each timestamp of a trajectory file (TUM), through the sequence's times.txt (within 1 ms);
+// -1 where none matches.
+std::vector<int> FrameIndices(const std::vector<double>& timestamps, const std::vector<double>& times);
+
+}  // namespace semslam::system_test
+
+// Skips the test when the semslam binary has not been built.
+#define SEMSLAM_REQUIRE_BINARY()                                                                  \
+  if (!std::filesystem::exists(::semslam::testing::SemslamBinary())) {                            \
+    GTEST_SKIP() << "semslam binary not built: " << ::semslam::testing::SemslamBinary().string(); \
+  }
+
+// Declares `var` as the artifact's directory, failing the test when it could not be made.
+#define SEMSLAM_ASSERT_ARTIFACT(var, expression)                        \
+  const ::semslam::system_test::Artifact var##_artifact = (expression); \
+  ASSERT_TRUE(var##_artifact.ok()) << var##_artifact.error;             \
+  const std::filesystem::path var = var##_artifact.dir
