@@ -1,8 +1,8 @@
 // semslam: visual semantic SLAM with landmarks. See README.md and `semslam <command> --help`.
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 
@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "semslam 0.1.0");
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "Log debug messages");
-  app.parse_complete_callback([&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
+  app.parse_complete_callback(
+      [&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
 
   semslam::cli::AddDemoCommand(app);
@@ -31,7 +32,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version print and succeed; a bad command line gets one line, like every other error.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::fprintf(stderr, "semslam: bad command line: %s (see --help)\n", e.what());
+    return 2;
   } catch (const semslam::InputError& e) {
     std::fprintf(stderr, "semslam: input error: %s\n", e.what());
     return 1;

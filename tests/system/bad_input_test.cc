@@ -106,7 +106,7 @@ TEST_F(BadInput, CorruptPngNamesTheImage) {
 
 // DISABLED: a truncated PNG gives two lines on stderr: libpng's own "libpng error: Read Error" (printed by
 // OpenCV's decoder) before semslam's one-line reason.
-TEST_F(BadInput, DISABLED_CorruptPngGivesOneLine) {
+TEST_F(BadInput, CorruptPngGivesOneLine) {
   const fs::path image = sequence_ / "image_0" / "000003.png";
   const std::string bytes = ReadText(image);
   std::ofstream(image, std::ios::binary | std::ios::trunc) << bytes.substr(0, 500);
@@ -130,7 +130,7 @@ TEST_F(BadInput, MissingMapNamesTheFile) {
 // DISABLED: a missing --map-in (like every option CLI11 checks: --config, --gps, --landmarks, --vocabulary)
 // prints two lines, "--map-in: File does not exist: ..." and "Run with --help for more information.", and
 // exits with CLI11's code 105 (apps/semslam/main.cc returns app.exit(e)).
-TEST_F(BadInput, DISABLED_MissingMapGivesOneLine) {
+TEST_F(BadInput, MissingMapGivesOneLine) {
   const fs::path missing = dir_ / "nowhere" / "map.semslam";
   ExpectOneLineFailure(Run({"--map-in", missing.string()}), {missing.string()});
 }
@@ -194,7 +194,7 @@ TEST_F(BadInput, MalformedGpsLog) {
 // georeference the map (here: 6 frames, fewer than one GPS sample every 30 frames): the catalogue is only
 // read after SLAM, in WriteGeoOutputs, and not at all without a georeference. With enough GPS it is read, but
 // only after the whole run, which is then lost (no run.json, no map.semslam).
-TEST_F(BadInput, DISABLED_MalformedLandmarkCatalogue) {
+TEST_F(BadInput, MalformedLandmarkCatalogue) {
   const fs::path catalogue = dir_ / "landmarks.csv";
   std::vector<std::string> rows = Lines(ReadText(source_.parent_path().parent_path() / "landmarks.csv"));
   ASSERT_GE(rows.size(), 3u);

@@ -20,7 +20,7 @@ namespace {
 // --localization-only and with every --pacing: after SlamSystem::LoadMap, Tracker::SetMapLoaded sets the
 // state to kLost while last_frame_ is still null, and Tracker::Track dereferences it
 // (`ReplaceMergedPoints(*last_frame_)`, src/semslam/tracking/tracker.cc). Enable once that is fixed.
-TEST(MapReuse, DISABLED_LocalizationOnlyRelocalizesAgainstTheSavedMap) {
+TEST(MapReuse, LocalizationOnlyRelocalizesAgainstTheSavedMap) {
   SEMSLAM_REQUIRE_BINARY();
   SEMSLAM_ASSERT_ARTIFACT(data, SyntheticDataset());
   SEMSLAM_ASSERT_ARTIFACT(first, MonoRun());

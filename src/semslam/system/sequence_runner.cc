@@ -10,8 +10,10 @@
 #include "semslam/core/error.h"
 #include "semslam/core/progress.h"
 #include "semslam/eval/trajectory_metrics.h"
+#include "semslam/geo/gps.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
+#include "semslam/landmarks/catalogue.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/report/html_report.h"
@@ -102,6 +104,16 @@ RunSummary RunSequence(const RunOptions& options) {
     throw InputError(sequence->directory(),
                      "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
   }
+  // Inputs read after SLAM are checked now, so that a malformed file stops the run before its first frame.
+  std::optional<GpsLog> gps_log;
+  if (!options.gps.empty()) {
+    gps_log = ReadGps(options.gps);
+    LogSkippedFixes(*gps_log);
+  }
+  if (!options.landmarks.empty()) {
+    const std::vector<Landmark> catalogue = ReadLandmarks(options.landmarks);
+    if (catalogue.empty()) throw InputError(options.landmarks, "the landmark catalogue holds no landmark");
+  }
   std::filesystem::create_directories(options.output);
   spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
                sequence->directory().string(), first, end - 1, stereo ? "stereo" : "monocular",
@@ -151,7 +163,7 @@ RunSummary RunSequence(const RunOptions& options) {
   geo.frames = slam.FramePoses();
   geo.keyframes = slam.KeyFramePoses();
   geo.edges = slam.KeyFrameEdges();
-  geo.gps_path = options.gps;
+  geo.gps = gps_log;
   geo.landmarks_path = options.landmarks;
   geo.monocular = !stereo;
   for (const SemanticPoint& p : semantic_points) {
