@@ -55,13 +55,18 @@ TEST(OrbOptions, DefaultsAreValidAndBadValuesAreRejected) {
   EXPECT_THROW(OrbExtractor(bad([](OrbOptions& b) { b.cell_size = 2; })), InvalidArgument);
 }
 
-TEST(OrbExtractor, LevelBudgetsFollowLevelArea) {
-  const OrbExtractor extractor;
-  const std::vector<int> budget = extractor.LevelBudgets();
-  ASSERT_EQ(budget.size(), 8u);
-  EXPECT_EQ(std::accumulate(budget.begin(), budget.end(), 0), 2000);
-  for (size_t l = 0; l + 2 < budget.size(); ++l) {
-    EXPECT_NEAR(static_cast<double>(budget[l]) / budget[l + 1], 1.44, 0.02) << "level " << l;
+TEST(OrbExtractor, LevelBudgetsFollowTheLevelShareExponent) {
+  for (const double exponent : {1.0, 2.0}) {
+    OrbOptions options;
+    options.level_share_exponent = exponent;
+    const OrbExtractor extractor(options);
+    const std::vector<int> budget = extractor.LevelBudgets();
+    ASSERT_EQ(budget.size(), 8u);
+    EXPECT_EQ(std::accumulate(budget.begin(), budget.end(), 0), 2000);
+    for (size_t l = 0; l + 2 < budget.size(); ++l) {
+      EXPECT_NEAR(static_cast<double>(budget[l]) / budget[l + 1], std::pow(1.2, exponent), 0.03)
+          << "exponent " << exponent << ", level " << l;
+    }
   }
 }
 

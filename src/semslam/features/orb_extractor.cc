@@ -28,6 +28,8 @@ void OrbOptions::Check() const {
   Require(edge_threshold >= kMinKeypointBorder && edge_threshold <= 200,
           "ORB options: edge_threshold must be in [16, 200]");
   Require(cell_size >= 8 && cell_size <= 512, "ORB options: cell_size must be in [8, 512]");
+  Require(level_share_exponent >= 0 && level_share_exponent <= 4,
+          "ORB options: level_share_exponent must be in [0, 4]");
 }
 
 namespace {
@@ -89,8 +91,8 @@ constexpr int kStripPixels = 80000;  // FAST work per task
 OrbExtractor::OrbExtractor(const OrbOptions& options) : options_(options) {
   options_.Check();
   geometry_ = PyramidGeometry::Make(options_.num_levels, options_.scale_factor);
-  // Budget by area: level l has 1 / s^(2l) of level 0's pixels.
-  const double f = 1.0 / (static_cast<double>(options_.scale_factor) * options_.scale_factor);
+  // Level l gets 1 / s^(e l) of level 0's share (e = level_share_exponent: 1 by side length, 2 by area).
+  const double f = 1.0 / std::pow(static_cast<double>(options_.scale_factor), options_.level_share_exponent);
   const double first = options_.num_features * (1.0 - f) / (1.0 - std::pow(f, options_.num_levels));
   level_budget_.assign(static_cast<size_t>(options_.num_levels), 0);
   int assigned = 0;

