@@ -32,10 +32,10 @@ struct LoopCloserOptions {
   int min_sim3_inliers = 20;
   int min_projected_matches = 40;
   // A loop may correct the current keyframe by at most this fraction of the distance driven since the matched
-  // keyframe, and turn it by at most max_correction_deg: drift grows with distance, while a place that only
-  // looks the same (repeated facades) would ask for a jump. SlamSystem sets the ratio by sensor (stereo maps
-  // drift far less than monocular ones).
-  double max_correction_ratio = 0.3;
+  // keyframe, and turn it by at most max_correction_deg: drift grows with distance (a few percent, monocular
+  // scale drift included), while a place that only looks the same (repeated facades, symmetric crossings)
+  // asks for a jump.
+  double max_correction_ratio = 0.1;
   double max_correction_deg = 20.0;
   bool global_ba = true;
   int global_ba_iterations = 10;

@@ -189,6 +189,8 @@ RunSummary RunSequence(const RunOptions& options) {
       {"tracked", stats.tracked},
       {"keyframes", stats.keyframes},
       {"points", stats.map_points},
+      {"keyframes_created", stats.keyframes_created},
+      {"points_created", stats.points_created},
       {"loops", stats.loops},
       {"relocalizations", stats.relocalizations},
       {"resets", stats.resets},

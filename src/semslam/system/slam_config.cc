@@ -88,6 +88,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_bow_matches", Bind(&o->loop.min_bow_matches)},
       {"min_sim3_inliers", Bind(&o->loop.min_sim3_inliers)},
       {"min_projected_matches", Bind(&o->loop.min_projected_matches)},
+      {"max_correction_ratio", Bind(&o->loop.max_correction_ratio)},
+      {"max_correction_deg", Bind(&o->loop.max_correction_deg)},
       {"global_ba", Bind(&o->loop.global_ba)},
       {"global_ba_iterations", Bind(&o->loop.global_ba_iterations)},
   };

@@ -27,8 +27,6 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,
   options_.tracker.monocular = options_.mode == SensorMode::kMonocular;
   options_.mapper.monocular = options_.tracker.monocular;
   options_.loop.fix_scale = !options_.tracker.monocular;
-  if (!options_.tracker.monocular)
-    options_.loop.max_correction_ratio = std::min(options_.loop.max_correction_ratio, 0.1);
   options_.tracker.localization_only = options_.localization_only;
   options_.tracker.exclude_dynamic = options_.exclude_dynamic;
   options_.mapper.exclude_dynamic = options_.exclude_dynamic;
@@ -311,6 +309,8 @@ SlamStatistics SlamSystem::Statistics() const {
   s.segmented_frames = segmented_frames_.load();
   auto lock = map_->ReadLock();
   s.keyframes = map_->NumKeyFrames();
+  s.keyframes_created = map_->next_keyframe_id();
+  s.points_created = map_->next_point_id();
   for (const MapPoint* p : map_->MapPoints()) s.map_points += p->is_bad() ? 0 : 1;
   return s;
 }

@@ -58,6 +58,8 @@ struct SlamStatistics {
   size_t tracked = 0;
   size_t keyframes = 0;
   size_t map_points = 0;
+  size_t keyframes_created = 0;  // culled ones included
+  size_t points_created = 0;
   size_t loops = 0;
   size_t relocalizations = 0;
   size_t resets = 0;
