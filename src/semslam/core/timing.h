@@ -61,5 +61,8 @@ class ScopedTimer {
 
 // Peak resident set size of this process in MiB (from /proc/self/status), 0 if unknown.
 double PeakRssMiB();
+// Hands memory the allocator keeps after large temporary work (a global bundle adjustment) back to the system,
+// so that the process does not stay at its peak. A no-op where the C library has no way to do it.
+void ReleaseFreeMemory();
 
 }  // namespace semslam

@@ -558,6 +558,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
   options.refine_without_outliers = false;
   BundleAdjust(problem, options);
   if (global_ba_abort_) {
+    ReleaseFreeMemory();
     global_ba_running_ = false;
     return;
   }
@@ -616,6 +617,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
     map_.NotifyBigChange();
   }
   mapper_.Release();
+  ReleaseFreeMemory();  // the solver's working memory is several times the map's
   ++num_global_ba_;
   global_ba_running_ = false;
   spdlog::info("global bundle adjustment done");

@@ -2,6 +2,7 @@
 
 #include <unordered_map>
 
+#include "semslam/core/timing.h"
 #include "semslam/optim/sim3_optimization.h"
 
 namespace semslam {
@@ -83,6 +84,7 @@ void GlobalBundleAdjustment(Map& map, int iterations, std::atomic<bool>* abort) 
   options.refine_without_outliers = false;
   const BundleAdjustmentResult result = BundleAdjust(problem, options);
   ApplyBundleAdjustment(map, problem, result, keyframes, points, refs, false);
+  ReleaseFreeMemory();
 }
 
 int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12,
