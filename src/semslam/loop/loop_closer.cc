@@ -10,6 +10,7 @@
 #include "semslam/core/error.h"
 #include "semslam/geometry/sim3_solver.h"
 #include "semslam/map/map_matcher.h"
+#include "semslam/map/place_candidates.h"
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/mapping/map_optimization.h"
 #include "semslam/optim/bundle_adjustment.h"
@@ -160,48 +161,12 @@ bool LoopCloser::DetectLoop(KeyFrame* current) {
     if (kf->is_bad() || !kf->has_bow) continue;
     min_score = std::min(min_score, vocabulary_.Score(current->bow, kf->bow));
   }
-  std::set<std::uint64_t> excluded = {current->id()};
-  for (KeyFrame* kf : covisibles) excluded.insert(kf->id());
-
-  const auto results = database_.Query(current->bow);
-  std::map<KeyFrame*, std::pair<int, double>> shared;
-  int max_common = 0;
-  for (const auto& r : results) {
-    if (excluded.count(r.id)) continue;
-    KeyFrame* kf = map_.KeyFrameById(r.id);
-    if (kf == nullptr || kf->is_bad()) continue;
-    shared[kf] = {static_cast<int>(r.shared_words), r.score};
-    max_common = std::max(max_common, static_cast<int>(r.shared_words));
-  }
-  const int min_common = static_cast<int>(0.8 * max_common);
-  std::map<KeyFrame*, double> scored;
-  for (const auto& [kf, value] : shared) {
-    if (value.first > min_common && value.second >= min_score) scored[kf] = value.second;
-  }
-  std::vector<KeyFrame*> candidates;
-  if (!scored.empty()) {
-    std::vector<std::pair<double, KeyFrame*>> groups;
-    double best_accumulated = 0.0;
-    for (const auto& [kf, score] : scored) {
-      double accumulated = score, best_score = score;
-      KeyFrame* best = kf;
-      for (KeyFrame* neighbour : kf->BestCovisibles(10)) {
-        const auto it = scored.find(neighbour);
-        if (it == scored.end()) continue;
-        accumulated += it->second;
-        if (it->second > best_score) {
-          best_score = it->second;
-          best = neighbour;
-        }
-      }
-      groups.emplace_back(accumulated, best);
-      best_accumulated = std::max(best_accumulated, accumulated);
-    }
-    std::set<KeyFrame*> seen;
-    for (const auto& [accumulated, kf] : groups) {
-      if (accumulated >= 0.75 * best_accumulated && seen.insert(kf).second) candidates.push_back(kf);
-    }
-  }
+  PlaceCandidateOptions candidate_options;
+  candidate_options.min_score = min_score;
+  candidate_options.excluded = {current->id()};
+  for (KeyFrame* kf : covisibles) candidate_options.excluded.insert(kf->id());
+  const std::vector<KeyFrame*> candidates =
+      FindPlaceCandidates(current->bow, database_, map_, candidate_options);
   if (candidates.empty()) {
     consistent_groups_.clear();
     return release();

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "semslam/features/matching.h"
+#include "semslam/place/bow_matching.h"
 
 namespace semslam {
 namespace {
@@ -15,24 +16,6 @@ constexpr int kLow = MatcherThresholds::kLow;
 
 // Search radius by how frontal the view is: oblique views get a wider window.
 float RadiusByViewingCos(float view_cos) { return view_cos > 0.998f ? 2.5f : 4.0f; }
-
-// Calls fn(indices1, indices2) for every vocabulary node present in both feature vectors.
-template <typename Fn>
-void ForEachSharedNode(const FeatureVector& a, const FeatureVector& b, Fn&& fn) {
-  auto ia = a.begin();
-  auto ib = b.begin();
-  while (ia != a.end() && ib != b.end()) {
-    if (ia->first == ib->first) {
-      fn(ia->second, ib->second);
-      ++ia;
-      ++ib;
-    } else if (ia->first < ib->first) {
-      ia = a.lower_bound(ib->first);
-    } else {
-      ib = b.lower_bound(ia->first);
-    }
-  }
-}
 
 struct Projection {
   Eigen::Vector3d point_in_camera;

@@ -15,6 +15,7 @@
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/system/sequence_runner.h"
 
 namespace semslam {
 namespace {
@@ -80,19 +81,11 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   options.Check();
   Stopwatch watch;
   const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
-  const size_t first = options.first_frame;
-  const size_t end = std::min(options.end_frame, sequence->size());
-  if (first >= end) {
-    throw InvalidArgument(fmt::format("localize: frames {}:{} are outside the sequence's {} frames", first,
-                                      end, sequence->size()));
-  }
   SlamOptions slam_options = options.slam;
   slam_options.localization_only = true;
   const bool stereo = slam_options.mode == SensorMode::kStereo;
-  if (stereo && !sequence->stereo()) {
-    throw InputError(sequence->directory(),
-                     "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
-  }
+  const size_t first = options.first_frame;
+  const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "localize");
   std::filesystem::create_directories(options.output);
   SlamSystem slam(slam_options, sequence->camera(), sequence->stereo());
   const MapFileContents contents = slam.LoadMap(options.map);

@@ -48,6 +48,20 @@ void ParseFrameRange(const std::string& text, size_t* first, size_t* end) {
   Require(*first < *end, fmt::format("frame range '{}' is empty", text));
 }
 
+size_t CheckFrameRange(const ImageSequence& sequence, size_t first, size_t end, bool stereo,
+                       std::string_view command) {
+  const size_t clamped = std::min(end, sequence.size());
+  if (first >= clamped) {
+    throw InvalidArgument(fmt::format("{}: frames {}:{} are outside the sequence's {} frames", command, first,
+                                      end, sequence.size()));
+  }
+  if (stereo && !sequence.stereo()) {
+    throw InputError(sequence.directory(),
+                     "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
+  }
+  return clamped;
+}
+
 namespace {
 
 nlohmann::json TimingJson(const TimingRegistry& timing) {
@@ -93,17 +107,9 @@ RunSummary RunSequence(const RunOptions& options) {
   options.Check();
   Stopwatch watch;
   const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
-  const size_t first = options.first_frame;
-  const size_t end = std::min(options.end_frame, sequence->size());
-  if (first >= end) {
-    throw InvalidArgument(
-        fmt::format("run: frames {}:{} are outside the sequence's {} frames", first, end, sequence->size()));
-  }
   const bool stereo = options.slam.mode == SensorMode::kStereo;
-  if (stereo && !sequence->stereo()) {
-    throw InputError(sequence->directory(),
-                     "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
-  }
+  const size_t first = options.first_frame;
+  const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "run");
   // Inputs read after SLAM are checked now, so that a malformed file stops the run before its first frame.
   std::optional<GpsLog> gps_log;
   if (!options.gps.empty()) {

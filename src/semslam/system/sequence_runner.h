@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <string_view>
 
 #include "semslam/system/slam_system.h"
 
@@ -48,5 +49,12 @@ RunSummary RunSequence(const RunOptions& options);
 
 // Parses "A:B" (either side may be empty) into [first, end). Throws InvalidArgument.
 void ParseFrameRange(const std::string& text, size_t* first, size_t* end);
+
+class ImageSequence;
+// The end of the frames [first, end) that `command` runs over, clamped to the sequence. Throws
+// InvalidArgument when no frame is left, InputError when stereo is asked of a sequence without a second
+// camera.
+size_t CheckFrameRange(const ImageSequence& sequence, size_t first, size_t end, bool stereo,
+                       std::string_view command);
 
 }  // namespace semslam

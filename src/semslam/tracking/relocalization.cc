@@ -7,55 +7,14 @@
 
 #include "semslam/geometry/pnp.h"
 #include "semslam/map/map_matcher.h"
+#include "semslam/map/place_candidates.h"
 #include "semslam/place/keyframe_database.h"
 
 namespace semslam {
 
 std::vector<KeyFrame*> DetectRelocalizationCandidates(const Frame& frame, const KeyFrameDatabase& database,
                                                       const Map& map) {
-  const auto results = database.Query(frame.bow);
-  if (results.empty()) return {};
-  std::map<KeyFrame*, std::pair<int, double>> shared;  // keyframe -> (shared words, score)
-  int max_common = 0;
-  for (const auto& r : results) {
-    KeyFrame* kf = map.KeyFrameById(r.id);
-    if (kf == nullptr || kf->is_bad()) continue;
-    shared[kf] = {static_cast<int>(r.shared_words), r.score};
-    max_common = std::max(max_common, static_cast<int>(r.shared_words));
-  }
-  const int min_common = static_cast<int>(0.8 * max_common);
-  std::map<KeyFrame*, double> scored;
-  for (const auto& [kf, value] : shared) {
-    if (value.first > min_common) scored[kf] = value.second;
-  }
-  if (scored.empty()) return {};
-  // Accumulate each candidate's score with its scored covisible neighbours; keep the best of each group.
-  std::vector<std::pair<double, KeyFrame*>> groups;
-  double best_accumulated = 0.0;
-  for (const auto& [kf, score] : scored) {
-    double accumulated = score;
-    double best_score = score;
-    KeyFrame* best = kf;
-    for (KeyFrame* neighbour : kf->BestCovisibles(10)) {
-      const auto it = scored.find(neighbour);
-      if (it == scored.end()) continue;
-      accumulated += it->second;
-      if (it->second > best_score) {
-        best_score = it->second;
-        best = neighbour;
-      }
-    }
-    groups.emplace_back(accumulated, best);
-    best_accumulated = std::max(best_accumulated, accumulated);
-  }
-  std::vector<KeyFrame*> candidates;
-  std::set<KeyFrame*> seen;
-  std::sort(groups.begin(), groups.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-  for (const auto& [accumulated, kf] : groups) {
-    if (accumulated < 0.75 * best_accumulated) break;
-    if (seen.insert(kf).second) candidates.push_back(kf);
-  }
-  return candidates;
+  return FindPlaceCandidates(frame.bow, database, map);
 }
 
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,

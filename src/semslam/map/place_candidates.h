@@ -1,0 +1,27 @@
+#pragma once
+// Keyframes of the map that look like a query (Galvez-Lopez & Tardos 2012; Mur-Artal et al. 2015, sections
+// V-VI), for relocalization and loop detection alike: the database's keyframes that share at least 80 % of
+// the best number of common words with the query (and score at least `min_score`) are scored; each one's
+// score is accumulated with those of its scored covisible neighbours, and the best-scoring keyframe of every
+// group whose accumulated score is at least 75 % of the best group's is a candidate, best group first.
+
+#include <cstdint>
+#include <set>
+#include <vector>
+
+#include "semslam/map/map.h"
+#include "semslam/place/bow_vector.h"
+#include "semslam/place/keyframe_database.h"
+
+namespace semslam {
+
+struct PlaceCandidateOptions {
+  double min_score = 0.0;
+  std::set<std::uint64_t> excluded;  // keyframe ids never returned (the query and its neighbours)
+};
+
+// Read lock on the map held by the caller.
+std::vector<KeyFrame*> FindPlaceCandidates(const BowVector& query, const KeyFrameDatabase& database,
+                                           const Map& map, const PlaceCandidateOptions& options = {});
+
+}  // namespace semslam
