@@ -86,13 +86,18 @@ TEST(Retrieval, KittiFramesFindTheirNeighboursWithAVocabularyNeverTrainedOnKitti
   KeyFrameDatabase db(vocabulary.size());
   for (int i = 0; i < 160; i += 10)
     db.Add(static_cast<std::uint64_t>(i), vocabulary.Transform(extractor.Extract(frame(i)).descriptors));
-  int right = 0, total = 0;
-  for (int i = 3; i < 160; i += 10) {  // 3 frames (about 2-3 m) after a database frame
+  // Each query lies 3 frames (about 2-3 m) after a database frame and 7 frames (up to 6 m) before the next.
+  int nearest = 0, bracketing = 0, total = 0;
+  for (int i = 3; i < 160; i += 10) {
     const auto results = db.Query(vocabulary.Transform(extractor.Extract(frame(i)).descriptors));
     ++total;
-    right += !results.empty() && results[0].id == static_cast<std::uint64_t>(i - 3);
+    if (results.empty()) continue;
+    nearest += results[0].id == static_cast<std::uint64_t>(i - 3);
+    bracketing += results[0].id == static_cast<std::uint64_t>(i - 3) ||
+                  results[0].id == static_cast<std::uint64_t>(i + 7);
   }
-  EXPECT_GE(right, total - 1) << right << " of " << total;
+  EXPECT_EQ(bracketing, total) << bracketing << " of " << total;
+  EXPECT_GE(nearest, total - 3) << nearest << " of " << total;
 }
 
 TEST(Retrieval, EvaluationCountsRevisitsAndRightAnswers) {

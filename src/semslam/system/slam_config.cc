@@ -54,6 +54,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
   s["features"] = {
       {"num_features", Bind(&o->tracker.orb.num_features)},
       {"init_num_features", Bind(&o->tracker.init_num_features)},
+      {"init_level_share_exponent", Bind(&o->tracker.init_level_share_exponent)},
       {"num_levels", Bind(&o->tracker.orb.num_levels)},
       {"scale_factor", Bind(&o->tracker.orb.scale_factor)},
       {"initial_fast_threshold", Bind(&o->tracker.orb.initial_fast_threshold)},

@@ -25,11 +25,13 @@ namespace semslam {
 void TrackerOptions::Check() const {
   orb.Check();
   Require(init_num_features >= 0, "tracker: init_num_features must be >= 0");
+  Require(init_level_share_exponent >= 0 && init_level_share_exponent <= 4,
+          "tracker: init_level_share_exponent must be in [0, 4]");
   Require(max_frames_between_keyframes >= 1, "tracker: max_frames_between_keyframes must be >= 1");
   Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
   Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
-  Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 && keyframe_tracked_ratio_stereo > 0 &&
-              keyframe_tracked_ratio_stereo <= 1,
+  Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 &&
+              keyframe_tracked_ratio_stereo > 0 && keyframe_tracked_ratio_stereo <= 1,
           "tracker: keyframe_tracked_ratio_mono/stereo must be in (0, 1]");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
   Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
@@ -67,6 +69,7 @@ Tracker::Tracker(const TrackerOptions& options, const PinholeCamera& camera, std
   OrbOptions init = options_.orb;
   init.num_features =
       options_.init_num_features > 0 ? options_.init_num_features : 2 * options_.orb.num_features;
+  init.level_share_exponent = options_.init_level_share_exponent;
   init_extractor_ = std::make_unique<OrbExtractor>(init);
 }
 
@@ -193,6 +196,20 @@ void Tracker::ReplaceMergedPoints(Frame& frame) const {
       p = resolved->is_bad() ? nullptr : resolved;
     }
   }
+}
+
+int Tracker::DiscardOutliers(Frame& frame) const {
+  int good = 0;
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.map_points[i] == nullptr) continue;
+    if (frame.outliers[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outliers[i] = false;
+    } else if (frame.map_points[i]->num_observations() > 0) {
+      ++good;
+    }
+  }
+  return good;
 }
 
 int Tracker::DropDynamicMatches(Frame& frame) const {
@@ -400,17 +417,7 @@ bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   frame.SetPose(last_frame_->camera_from_world());
   OptimizeFramePose(frame);
-  int good = 0;
-  for (size_t i = 0; i < frame.map_points.size(); ++i) {
-    if (frame.map_points[i] == nullptr) continue;
-    if (frame.outliers[i]) {
-      frame.map_points[i] = nullptr;
-      frame.outliers[i] = false;
-    } else if (frame.map_points[i]->num_observations() > 0) {
-      ++good;
-    }
-  }
-  return good >= 10;
+  return DiscardOutliers(frame) >= 10;
 }
 
 bool Tracker::TrackWithMotionModel(Frame& frame) {
@@ -427,17 +434,7 @@ bool Tracker::TrackWithMotionModel(Frame& frame) {
   if (n < 20) return false;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   OptimizeFramePose(frame);
-  int good = 0;
-  for (size_t i = 0; i < frame.map_points.size(); ++i) {
-    if (frame.map_points[i] == nullptr) continue;
-    if (frame.outliers[i]) {
-      frame.map_points[i] = nullptr;
-      frame.outliers[i] = false;
-    } else if (frame.map_points[i]->num_observations() > 0) {
-      ++good;
-    }
-  }
-  return good >= 10;
+  return DiscardOutliers(frame) >= 10;
 }
 
 void Tracker::UpdateLocalMap(Frame& frame) {
@@ -590,7 +587,8 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
     }
   }
   const bool need_close = tracked_close < 100 && untracked_close > 70;
-  double ratio = options_.monocular ? options_.keyframe_tracked_ratio_mono : options_.keyframe_tracked_ratio_stereo;
+  double ratio =
+      options_.monocular ? options_.keyframe_tracked_ratio_mono : options_.keyframe_tracked_ratio_stereo;
   if (num_keyframes < 2) ratio = 0.4;
 
   const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;

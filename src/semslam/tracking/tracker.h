@@ -25,6 +25,9 @@ struct TrackerOptions {
   bool monocular = true;
   OrbOptions orb;             // for tracking frames
   int init_num_features = 0;  // features for monocular initialization frames (0 = 2 x orb.num_features)
+  // Initialization frames share features among levels by area: the fine levels keep the near points whose
+  // parallax the two-view test needs (by side length, the 200-frame city initialized at frame 14, not 0).
+  double init_level_share_exponent = 2.0;
   int max_frames_between_keyframes = 10;  // usually the frame rate
   // A new keyframe is due when the frame tracks fewer than this share of the reference keyframe's points.
   double keyframe_tracked_ratio_mono = 0.9;
@@ -114,6 +117,8 @@ class Tracker {
   bool NeedNewKeyFrame(const Frame& frame) const;
   void CreateNewKeyFrame(Frame& frame);
   void ComputeBow(Frame& frame) const;
+  // Clears the matches pose optimization rejected; returns the matches left to points in the map.
+  int DiscardOutliers(Frame& frame) const;
   // Clears matches to moving points when exclude_dynamic is set; returns the matches left.
   int DropDynamicMatches(Frame& frame) const;
   void ReplaceMergedPoints(Frame& frame) const;
