@@ -18,21 +18,12 @@
 #include "semslam/geometry/pnp.h"
 #include "semslam/geometry/sim3_solver.h"
 #include "semslam/geometry/two_view.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-PinholeCamera KittiCamera() {
-  PinholeCamera camera;
-  camera.width = 1241;
-  camera.height = 376;
-  camera.fx = camera.fy = 718.856;
-  camera.cx = 607.19;
-  camera.cy = 185.22;
-  return camera;
-}
 
 Rigid3d Camera2FromCamera1() {
   const Eigen::Quaterniond rotation =

@@ -15,19 +15,10 @@
 #include "semslam/optim/pose_graph.h"
 #include "semslam/optim/pose_optimization.h"
 #include "semslam/optim/sim3_optimization.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
-
-PinholeCamera KittiCamera() {
-  PinholeCamera c;
-  c.width = 1241;
-  c.height = 376;
-  c.fx = c.fy = 718.856;
-  c.cx = 607.19;
-  c.cy = 185.22;
-  return c;
-}
 
 Eigen::Vector3d Gaussian3(std::mt19937& rng, double sigma) {
   std::normal_distribution<double> n(0.0, sigma);

@@ -18,21 +18,12 @@
 #include "semslam/semantics/label_image_segmenter.h"
 #include "semslam/semantics/model_card.h"
 #include "semslam/semantics/segmentation.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
 const std::filesystem::path kSharedData = SEMSLAM_SHARED_DATA_DIR;
-
-PinholeCamera KittiCamera() {
-  PinholeCamera camera;
-  camera.width = 1241;
-  camera.height = 376;
-  camera.fx = camera.fy = 718.856;
-  camera.cx = 607.1928;
-  camera.cy = 185.2157;
-  return camera;
-}
 
 // A segmentation like ENet's on a KITTI frame: 19 log-probabilities per pixel at 1024x512, over a 1241x376
 // image.

@@ -3,22 +3,13 @@
 #include <gtest/gtest.h>
 
 #include "semslam/core/error.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
-PinholeCamera KittiLike() {
-  PinholeCamera c;
-  c.width = 1241;
-  c.height = 376;
-  c.fx = c.fy = 718.856;
-  c.cx = 607.1928;
-  c.cy = 185.2157;
-  return c;
-}
-
 TEST(PinholeCamera, ProjectsKnownPoint) {
-  const PinholeCamera c = KittiLike();
+  const PinholeCamera c = KittiCamera();
   // 1 m right, 0.5 m down, 10 m ahead: u = 718.856 * 0.1 + 607.1928, v = 718.856 * 0.05 + 185.2157.
   const Eigen::Vector2d uv = c.Project({1.0, 0.5, 10.0});
   EXPECT_NEAR(uv.x(), 679.0784, 1e-9);
@@ -26,7 +17,7 @@ TEST(PinholeCamera, ProjectsKnownPoint) {
 }
 
 TEST(PinholeCamera, UnprojectInvertsProject) {
-  const PinholeCamera c = KittiLike();
+  const PinholeCamera c = KittiCamera();
   const Eigen::Vector3d p(-3.0, 1.2, 17.0);
   const Eigen::Vector2d uv = c.Project(p);
   EXPECT_TRUE(c.Unproject(uv).isApprox(p.normalized(), 1e-12));
@@ -34,33 +25,33 @@ TEST(PinholeCamera, UnprojectInvertsProject) {
 }
 
 TEST(PinholeCamera, DistortionRoundTrip) {
-  PinholeCamera c = KittiLike();
+  PinholeCamera c = KittiCamera();
   c.distortion = {-0.28, 0.07, 0.0002, -0.0001, 0.0};
   const Eigen::Vector3d p(2.0, -1.0, 8.0);
   const Eigen::Vector2d uv = c.Project(p);
-  EXPECT_GT((uv - KittiLike().Project(p)).norm(), 1.0);  // distortion moves the pixel
+  EXPECT_GT((uv - KittiCamera().Project(p)).norm(), 1.0);  // distortion moves the pixel
   EXPECT_TRUE(c.UnprojectDepth(uv, 8.0).isApprox(p, 1e-9));
 }
 
 TEST(PinholeCamera, VisibilityChecksDepthAndBounds) {
-  const PinholeCamera c = KittiLike();
+  const PinholeCamera c = KittiCamera();
   EXPECT_TRUE(c.ProjectIfVisible({0, 0, 5}).has_value());
   EXPECT_FALSE(c.ProjectIfVisible({0, 0, -5}).has_value());
   EXPECT_FALSE(c.ProjectIfVisible({100, 0, 5}).has_value());
 }
 
 TEST(PinholeCamera, CheckRejectsBadIntrinsics) {
-  PinholeCamera c = KittiLike();
+  PinholeCamera c = KittiCamera();
   EXPECT_NO_THROW(c.Check());
   c.fx = -1;
   EXPECT_THROW(c.Check(), InvalidArgument);
-  c = KittiLike();
+  c = KittiCamera();
   c.width = 0;
   EXPECT_THROW(c.Check(), InvalidArgument);
 }
 
 TEST(PinholeCamera, ScaledKeepsRaysOfPixelCentres) {
-  const PinholeCamera c = KittiLike();
+  const PinholeCamera c = KittiCamera();
   const PinholeCamera half = c.Scaled(0.5);
   const Eigen::Vector3d p(1.0, 2.0, 20.0);
   // Pixel centres scale about the image corner: (u + 0.5) * s - 0.5.
@@ -69,7 +60,7 @@ TEST(PinholeCamera, ScaledKeepsRaysOfPixelCentres) {
 }
 
 TEST(StereoRig, DisparityAndDepthAgree) {
-  StereoRig rig{KittiLike(), 0.537};
+  StereoRig rig{KittiCamera(), 0.537};
   const Eigen::Vector3d p(1.5, -0.3, 12.0);
   const Eigen::Vector2d left = rig.left.Project(p);
   const double disparity = left.x() - rig.ProjectRightU(p);

@@ -7,21 +7,12 @@
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/camera.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-PinholeCamera TestCamera() {
-  PinholeCamera camera;
-  camera.width = 1241;
-  camera.height = 376;
-  camera.fx = camera.fy = 718.856;
-  camera.cx = 607.19;
-  camera.cy = 185.22;
-  return camera;
-}
 
 Rigid3d RandomPose(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
@@ -40,7 +31,7 @@ struct Correspondences {
 
 // Points visible in the test camera at depths 3..30 m, pixel noise, and a fraction of random bearings.
 Correspondences MakeCorrespondences(int count, double noise_px, double outlier_ratio, unsigned seed) {
-  const PinholeCamera camera = TestCamera();
+  const PinholeCamera camera = KittiCamera();
   std::mt19937 rng(seed);
   Correspondences c;
   c.camera_from_world = RandomPose(rng);
@@ -99,7 +90,7 @@ TEST(PnpRansac, RecoversPoseWithNoiseAndOutliers) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     const Correspondences c = MakeCorrespondences(300, 0.5, 0.4, seed);
     PnpRansacOptions options;
-    options.focal_length = TestCamera().fx;
+    options.focal_length = KittiCamera().fx;
     options.seed = seed;
     const auto result = SolvePnpRansac(c.world_points, c.bearings, options);
     ASSERT_TRUE(result.has_value());
@@ -128,7 +119,7 @@ TEST(PnpRansac, RefinementReachesTheExactPose) {
 TEST(PnpRansac, DeterministicForSeed) {
   const Correspondences c = MakeCorrespondences(200, 1.0, 0.5, 5);
   PnpRansacOptions options;
-  options.focal_length = TestCamera().fx;
+  options.focal_length = KittiCamera().fx;
   options.seed = 99;
   const auto a = SolvePnpRansac(c.world_points, c.bearings, options);
   const auto b = SolvePnpRansac(c.world_points, c.bearings, options);
@@ -139,7 +130,7 @@ TEST(PnpRansac, DeterministicForSeed) {
 
 TEST(PnpRansac, DegenerateOrTooFewGiveNothing) {
   PnpRansacOptions options;
-  options.focal_length = TestCamera().fx;
+  options.focal_length = KittiCamera().fx;
   // Too few correspondences.
   const Correspondences few = MakeCorrespondences(8, 0.0, 0.0, 6);
   EXPECT_FALSE(SolvePnpRansac(few.world_points, few.bearings, options).has_value());
@@ -158,7 +149,7 @@ TEST(PnpRansac, DegenerateOrTooFewGiveNothing) {
 
 TEST(PnpRansac, BadInputThrows) {
   PnpRansacOptions options;
-  options.focal_length = TestCamera().fx;
+  options.focal_length = KittiCamera().fx;
   const Correspondences c = MakeCorrespondences(20, 0.0, 0.0, 8);
   EXPECT_THROW(SolvePnpRansac(c.world_points, Points3d(c.bearings.begin(), c.bearings.end() - 1), options),
                InvalidArgument);

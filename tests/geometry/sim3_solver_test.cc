@@ -7,21 +7,12 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-PinholeCamera TestCamera() {
-  PinholeCamera camera;
-  camera.width = 1241;
-  camera.height = 376;
-  camera.fx = camera.fy = 718.856;
-  camera.cx = 607.19;
-  camera.cy = 185.22;
-  return camera;
-}
 
 struct Matches {
   Sim3Correspondences correspondences;
@@ -33,7 +24,7 @@ struct Matches {
 Matches MakeMatches(const Sim3d& camera1_from_camera2, int count, double outlier_ratio, unsigned seed) {
   Matches m;
   Sim3Correspondences& c = m.correspondences;
-  c.camera1 = c.camera2 = TestCamera();
+  c.camera1 = c.camera2 = KittiCamera();
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, c.camera2.width - 1.0), v(0.0, c.camera2.height - 1.0);
   std::uniform_real_distribution<double> depth(4.0, 30.0), unit(0.0, 1.0);

@@ -7,21 +7,12 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-PinholeCamera KittiLikeCamera() {
-  PinholeCamera camera;
-  camera.width = 1241;
-  camera.height = 376;
-  camera.fx = camera.fy = 718.856;
-  camera.cx = 607.19;
-  camera.cy = 185.22;
-  return camera;
-}
 
 // camera2_from_camera1 for camera 2 at `center` (in camera 1) rotated by yaw (about y) and pitch (about x).
 Rigid3d Motion(const Eigen::Vector3d& center, double yaw_deg, double pitch_deg) {
@@ -31,7 +22,7 @@ Rigid3d Motion(const Eigen::Vector3d& center, double yaw_deg, double pitch_deg) 
 }
 
 struct Scene {
-  PinholeCamera camera = KittiLikeCamera();
+  PinholeCamera camera = KittiCamera();
   Rigid3d camera2_from_camera1;
   Points3d points;  // camera 1
   Points2d pixels1, pixels2;
@@ -206,7 +197,7 @@ TEST(TwoView, DeterministicForSeedAndThreading) {
 }
 
 TEST(TwoView, BadInputThrows) {
-  const PinholeCamera camera = KittiLikeCamera();
+  const PinholeCamera camera = KittiCamera();
   const Points2d one = {{1, 1}};
   EXPECT_THROW(InitializeTwoView(one, {}, camera, TwoViewOptions{}), InvalidArgument);
   EXPECT_THROW(InitializeTwoView({{std::nan(""), 1.0}}, one, camera, TwoViewOptions{}), InvalidArgument);

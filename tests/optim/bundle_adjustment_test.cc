@@ -12,7 +12,6 @@
 namespace semslam {
 namespace {
 
-using testing_optim::KittiCamera;
 using testing_optim::Perturbation;
 using testing_optim::RandomVector;
 using testing_optim::RotationError;

@@ -16,7 +16,6 @@ namespace {
 
 using optim_internal::kRigidSize;
 using optim_internal::kSim3Size;
-using testing_optim::KittiCamera;
 using testing_optim::RandomVector;
 
 // Evaluates `cost` at `params`; returns residuals and, when asked, the ambient Jacobians.

@@ -11,7 +11,6 @@
 namespace semslam {
 namespace {
 
-using testing_optim::KittiCamera;
 using testing_optim::Perturbation;
 using testing_optim::RotationError;
 

@@ -1,5 +1,5 @@
 #pragma once
-// Synthetic scenes for the optimizer tests: a KITTI-like pinhole camera, points in front of it, noise from
+// Synthetic scenes for the optimizer tests (with the KITTI camera of support/): points in front of it, noise from
 // fixed seeds.
 
 #include <random>
@@ -7,18 +7,9 @@
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/rigid3.h"
 #include "semslam/geometry/sim3.h"
+#include "support/kitti_camera.h"
 
 namespace semslam::testing_optim {
-
-inline PinholeCamera KittiCamera() {
-  PinholeCamera c;
-  c.width = 1241;
-  c.height = 376;
-  c.fx = c.fy = 718.856;
-  c.cx = 607.19;
-  c.cy = 185.22;
-  return c;
-}
 
 inline Eigen::Vector3d RandomVector(std::mt19937& rng, double sigma) {
   std::normal_distribution<double> n(0.0, sigma);

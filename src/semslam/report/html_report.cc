@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numeric>
@@ -740,61 +741,28 @@ void AppendTimeAnalysis(Page& page, const ReportInputs& in) {
     }
     rows.push_back(row);
   }
-  {
-    Row row{"Tracking", "per frame, tracking thread (ORB extraction, motion model, local map)",
-            {},         {},
-            {},         "15.1 Hz (ORB-SLAM2)"};
-    if (const ModuleTiming* m = FindModule(modules, "tracking")) {
-      row.median_ms = m->median_ms;
-      row.p95_ms = m->p95_ms;
-      row.count = m->count;
+  // A module's row from its timing entry (the first of `names` that was timed).
+  const auto module_row = [&](std::string what, std::string detail, std::string paper,
+                              std::initializer_list<std::string_view> names) {
+    Row row{std::move(what), std::move(detail), {}, {}, {}, std::move(paper)};
+    for (const std::string_view name : names) {
+      if (const ModuleTiming* m = FindModule(modules, name)) {
+        row.median_ms = m->median_ms;
+        row.p95_ms = m->p95_ms;
+        row.count = m->count;
+        break;
+      }
     }
-    rows.push_back(row);
-  }
-  {
-    Row row{"Data association (label fusion)",
-            "per segmented frame, labels fused into map points",
-            {},
-            {},
-            {},
-            "0.5 ms"};
-    if (const ModuleTiming* m = FindModule(modules, "label_fusion")) {
-      row.median_ms = m->median_ms;
-      row.p95_ms = m->p95_ms;
-      row.count = m->count;
-    }
-    rows.push_back(row);
-  }
-  {
-    Row row{"Local mapping",
-            "per keyframe, local-mapping thread (triangulation, local BA, culling)",
-            {},
-            {},
-            {},
-            ""};
-    if (const ModuleTiming* m = FindModule(modules, "local_mapping")) {
-      row.median_ms = m->median_ms;
-      row.p95_ms = m->p95_ms;
-      row.count = m->count;
-    }
-    rows.push_back(row);
-  }
-  {
-    Row row{"Loop closing",
-            "per keyframe, loop thread (detection; correction when a loop is found)",
-            {},
-            {},
-            {},
-            ""};
-    const ModuleTiming* m = FindModule(modules, "loop_closing");
-    if (m == nullptr) m = FindModule(modules, "loop_detection");
-    if (m != nullptr) {
-      row.median_ms = m->median_ms;
-      row.p95_ms = m->p95_ms;
-      row.count = m->count;
-    }
-    rows.push_back(row);
-  }
+    rows.push_back(std::move(row));
+  };
+  module_row("Tracking", "per frame, tracking thread (ORB extraction, motion model, local map)",
+             "15.1 Hz (ORB-SLAM2)", {"tracking"});
+  module_row("Data association (label fusion)", "per segmented frame, labels fused into map points", "0.5 ms",
+             {"label_fusion"});
+  module_row("Local mapping", "per keyframe, local-mapping thread (triangulation, local BA, culling)", "",
+             {"local_mapping"});
+  module_row("Loop closing", "per keyframe, loop thread (detection; correction when a loop is found)", "",
+             {"loop_closing", "loop_detection"});
   {
     Row row{"Whole system",
             "frames / run seconds (start-up and outputs included)",
