@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -12,19 +11,8 @@
 namespace semslam {
 namespace {
 
-namespace fs = std::filesystem;
-
-int RunSemslam(const std::string& args, const fs::path& out, const fs::path& err) {
-  const std::string command =
-      testing::SemslamBinary().string() + " " + args + " > " + out.string() + " 2> " + err.string();
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Read(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using testing::CommandResult;
+using testing::RunSemslam;
 
 Trajectory Drive(int n) {
   Trajectory t;
@@ -38,12 +26,8 @@ Trajectory Drive(int n) {
 
 class EvalCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    if (!fs::exists(testing::SemslamBinary())) GTEST_SKIP() << "semslam binary not built";
-  }
+  void SetUp() override { SEMSLAM_REQUIRE_BINARY(); }
   testing::TempDir dir_;
-  fs::path out_ = dir_ / "out.json";
-  fs::path err_ = dir_ / "err.txt";
 };
 
 TEST_F(EvalCli, PrintsJsonWithTheMetrics) {
@@ -52,12 +36,10 @@ TEST_F(EvalCli, PrintsJsonWithTheMetrics) {
   for (auto& p : estimate) p.world_from_camera.translation += Eigen::Vector3d(0.3, 0.0, 0.4);
   WriteTumTrajectory(dir_ / "truth.tum", truth);
   WriteTumTrajectory(dir_ / "estimate.tum", estimate);
-  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "estimate.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string() + " --align none",
-                       out_, err_),
-            0)
-      << Read(err_);
-  const nlohmann::json j = nlohmann::json::parse(Read(out_));
+  const CommandResult r = RunSemslam({"eval", "--estimate", (dir_ / "estimate.tum").string(), "--truth",
+                                      (dir_ / "truth.tum").string(), "--align", "none"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_NEAR(j.at("ate_rmse").get<double>(), 0.5, 1e-6);
   EXPECT_NEAR(j.at("ate_max").get<double>(), 0.5, 1e-6);
   EXPECT_EQ(j.at("alignment"), "none");
@@ -80,12 +62,10 @@ TEST_F(EvalCli, PrintsJsonWithTheMetrics) {
   Trajectory scaled = truth;
   for (auto& p : scaled) p.world_from_camera.translation *= 2.0;
   WriteTumTrajectory(dir_ / "scaled.tum", scaled);
-  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "scaled.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string(),
-                       out_, err_),
-            0)
-      << Read(err_);
-  const nlohmann::json s = nlohmann::json::parse(Read(out_));
+  const CommandResult rs = RunSemslam(
+      {"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth", (dir_ / "truth.tum").string()});
+  ASSERT_EQ(rs.exit_code, 0) << rs.Describe();
+  const nlohmann::json s = nlohmann::json::parse(rs.out);
   EXPECT_NEAR(s.at("ate_rmse").get<double>(), 0.0, 1e-6);
   EXPECT_NEAR(s.at("scale").get<double>(), 0.5, 1e-9);
 }
@@ -97,13 +77,11 @@ TEST_F(EvalCli, KittiPosesWithTimesAndShortPathsGiveNullKittiErrors) {
   std::vector<double> times;
   for (int i = 0; i < 60; ++i) times.push_back(0.1 * i);
   WriteTimes(dir_ / "times.txt", times);
-  ASSERT_EQ(RunSemslam("eval --estimate " + (dir_ / "estimate.tum").string() + " --truth " +
-                           (dir_ / "truth.txt").string() + " --times " + (dir_ / "times.txt").string() +
-                           " --align se3 --max-dt 0.001",
-                       out_, err_),
-            0)
-      << Read(err_);
-  const nlohmann::json j = nlohmann::json::parse(Read(out_));
+  const CommandResult r = RunSemslam({"eval", "--estimate", (dir_ / "estimate.tum").string(), "--truth",
+                                      (dir_ / "truth.txt").string(), "--times", (dir_ / "times.txt").string(),
+                                      "--align", "se3", "--max-dt", "0.001"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("matched"), 40);
   EXPECT_TRUE(j.at("kitti_trans_pct").is_null());
   EXPECT_TRUE(j.at("kitti_rot_deg_per_100m").is_null());
@@ -114,36 +92,26 @@ TEST_F(EvalCli, KittiPosesWithTimesAndShortPathsGiveNullKittiErrors) {
 TEST_F(EvalCli, ErrorsExitNonZeroWithOneLine) {
   WriteTumTrajectory(dir_ / "truth.tum", Drive(10));
   std::ofstream(dir_ / "bad.tum") << "# header\n0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 1\n";
-  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "bad.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string(),
-                       out_, err_),
-            1);
-  std::string err = Read(err_);
-  EXPECT_NE(err.find("bad.tum:3"), std::string::npos) << err;
-  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  const std::string truth = (dir_ / "truth.tum").string();
+  CommandResult r = RunSemslam({"eval", "--estimate", (dir_ / "bad.tum").string(), "--truth", truth});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("bad.tum:3"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 
-  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "missing.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string(),
-                       out_, err_),
-            1);
-  err = Read(err_);
-  EXPECT_NE(err.find("missing.tum"), std::string::npos) << err;
+  r = RunSemslam({"eval", "--estimate", (dir_ / "missing.tum").string(), "--truth", truth});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("missing.tum"), std::string::npos) << r.err;
 
   Trajectory late = Drive(10);
   for (auto& p : late) p.timestamp += 500;
   WriteTumTrajectory(dir_ / "late.tum", late);
-  EXPECT_EQ(RunSemslam("eval --estimate " + (dir_ / "late.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string(),
-                       out_, err_),
-            1);
-  err = Read(err_);
-  EXPECT_NE(err.find("no estimated pose matched"), std::string::npos) << err;
-  EXPECT_TRUE(Read(out_).empty());
+  r = RunSemslam({"eval", "--estimate", (dir_ / "late.tum").string(), "--truth", truth});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no estimated pose matched"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
 
-  EXPECT_NE(RunSemslam("eval --estimate " + (dir_ / "late.tum").string() + " --truth " +
-                           (dir_ / "truth.tum").string() + " --align affine",
-                       out_, err_),
-            0);
+  r = RunSemslam({"eval", "--estimate", (dir_ / "late.tum").string(), "--truth", truth, "--align", "affine"});
+  EXPECT_NE(r.exit_code, 0);
 }
 
 }  // namespace

@@ -8,17 +8,14 @@
 #include <initializer_list>
 #include <string>
 
+#include "support/test_support.h"  // ReadText
+
 namespace semslam::testing {
 
 inline void WriteText(const std::filesystem::path& path, const std::string& text) {
   std::filesystem::create_directories(path.parent_path());
   std::ofstream out(path, std::ios::binary);
   out << text;
-}
-
-inline std::string ReadText(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // Runs `statement`, expects an InputError whose message contains every one of `parts`.

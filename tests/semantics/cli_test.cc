@@ -2,8 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -14,30 +12,12 @@
 namespace semslam {
 namespace {
 
-struct CommandResult {
-  int status = -1;
-  std::string out;
-};
-
-CommandResult RunSemslam(const std::string& arguments) {
-  const std::string command = testing::SemslamBinary().string() + " " + arguments + " 2>/dev/null";
-  CommandResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.out.append(buffer, n);
-  result.status = pclose(pipe);
-  return result;
-}
+using testing::CommandResult;
+using testing::RunSemslam;
 
 class SegmentCommand : public ::testing::Test {
  protected:
-  void SetUp() override {
-    if (!std::filesystem::exists(testing::SemslamBinary())) {
-      GTEST_SKIP() << "semslam binary not built: " << testing::SemslamBinary();
-    }
-  }
+  void SetUp() override { SEMSLAM_REQUIRE_BINARY(); }
 };
 
 TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
@@ -53,9 +33,9 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
     ASSERT_TRUE(cv::imwrite((dir / "label_0" / cv::format("%06d.png", f)).string(), truth));
   }
   const CommandResult r =
-      RunSemslam("segment --segmenter truth-noisy:0.2 --images " + (dir / "image_0").string() + " --truth " +
-                 (dir / "label_0").string() + " --out " + (dir / "out").string());
-  ASSERT_EQ(r.status, 0) << r.out;
+      RunSemslam({"segment", "--segmenter", "truth-noisy:0.2", "--images", (dir / "image_0").string(),
+                  "--truth", (dir / "label_0").string(), "--out", (dir / "out").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.Describe();
   const auto json = nlohmann::json::parse(r.out);
   EXPECT_EQ(json["images"], 3);
   EXPECT_NEAR(json["pixel_accuracy"].get<double>(), 0.8, 0.02);
@@ -72,25 +52,24 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
 
   // The sequence's label_0 next to image_0 is found without --truth.
   const CommandResult sibling =
-      RunSemslam("segment --segmenter truth-noisy:0 --images " + (dir / "image_0").string());
-  ASSERT_EQ(sibling.status, 0);
+      RunSemslam({"segment", "--segmenter", "truth-noisy:0", "--images", (dir / "image_0").string()});
+  ASSERT_EQ(sibling.exit_code, 0);
   EXPECT_NEAR(nlohmann::json::parse(sibling.out)["class_histogram"]["sky"].get<double>(), 0.4, 1e-9);
 }
 
 TEST_F(SegmentCommand, OnnxCardAndErrors) {
   testing::TempDir dir;
   ASSERT_TRUE(cv::imwrite((dir / "red.png").string(), cv::Mat(8, 16, CV_8UC3, cv::Scalar(0, 0, 255))));
-  const CommandResult r =
-      RunSemslam("segment --segmenter onnx:" SEMSLAM_SEMANTICS_TEST_DATA "/tiny_segnet.yaml --images " +
-                 (dir / "red.png").string());
-  ASSERT_EQ(r.status, 0) << r.out;
+  const std::string red = (dir / "red.png").string();
+  const CommandResult r = RunSemslam(
+      {"segment", "--segmenter", "onnx:" SEMSLAM_SEMANTICS_TEST_DATA "/tiny_segnet.yaml", "--images", red});
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.Describe();
   EXPECT_NEAR(nlohmann::json::parse(r.out)["class_histogram"]["road"].get<double>(), 1.0, 1e-9);
-  EXPECT_NE(RunSemslam("segment --segmenter bogus:1 --images " + (dir / "red.png").string()).status, 0);
-  EXPECT_NE(
-      RunSemslam("segment --segmenter labels:/nonexistent --images " + (dir / "red.png").string()).status, 0);
-  EXPECT_NE(RunSemslam("segment --segmenter none --images " + (dir / "red.png").string()).status, 0);
-  EXPECT_NE(
-      RunSemslam("segment --segmenter truth-noisy:0.1 --images " + (dir / "missing.png").string()).status, 0);
+  EXPECT_NE(RunSemslam({"segment", "--segmenter", "bogus:1", "--images", red}).exit_code, 0);
+  EXPECT_NE(RunSemslam({"segment", "--segmenter", "labels:/nonexistent", "--images", red}).exit_code, 0);
+  EXPECT_NE(RunSemslam({"segment", "--segmenter", "none", "--images", red}).exit_code, 0);
+  const std::string missing = (dir / "missing.png").string();
+  EXPECT_NE(RunSemslam({"segment", "--segmenter", "truth-noisy:0.1", "--images", missing}).exit_code, 0);
 }
 
 }  // namespace

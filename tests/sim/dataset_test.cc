@@ -3,12 +3,10 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <sstream>
 
 #include "semslam/io/kitti_odometry.h"
 #include "semslam/io/kitti_raw.h"
@@ -32,28 +30,12 @@ SynthOptions Tiny(int frames = 4) {
   return o;
 }
 
-std::string ReadAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::map<std::string, std::string> Tree(const fs::path& root) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(root)) {
-    if (e.is_regular_file()) files[fs::relative(e.path(), root).string()] = ReadAll(e.path());
+    if (e.is_regular_file()) files[fs::relative(e.path(), root).string()] = testing::ReadText(e.path());
   }
   return files;
-}
-
-int RunSemslam(const std::string& args, std::string* output = nullptr) {
-  testing::TempDir log_dir;
-  const fs::path log = log_dir / "log.txt";
-  const int status =
-      std::system((testing::SemslamBinary().string() + " " + args + " > " + log.string() + " 2>&1").c_str());
-  if (output != nullptr) *output = ReadAll(log);
-  return status;
 }
 
 TEST(Dataset, LayoutAndIdenticalBytes) {
@@ -202,27 +184,29 @@ TEST(Dataset, SceneJsonDescribesTheTown) {
 }
 
 TEST(SynthCli, WritesADatasetAndRejectsBadArguments) {
-  if (!fs::exists(testing::SemslamBinary())) GTEST_SKIP() << "semslam binary not built";
+  SEMSLAM_REQUIRE_BINARY();
   testing::TempDir dir;
-  std::string output;
-  EXPECT_NE(RunSemslam("synth --out " + (dir / "neg").string() + " --frames -5", &output), 0);
-  EXPECT_NE(output.find("--frames"), std::string::npos) << output;
-  EXPECT_NE(RunSemslam("synth --out " + (dir / "x").string() + " --preset nowhere", &output), 0);
-  EXPECT_NE(output.find("preset"), std::string::npos) << output;
-  EXPECT_NE(RunSemslam("synth --out " + (dir / "x").string() + " --gps-noise -1", &output), 0);
+  // Errors are reported on stderr.
+  testing::CommandResult r =
+      testing::RunSemslam({"synth", "--out", (dir / "neg").string(), "--frames", "-5"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--frames"), std::string::npos) << r.err;
+  r = testing::RunSemslam({"synth", "--out", (dir / "x").string(), "--preset", "nowhere"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("preset"), std::string::npos) << r.err;
+  EXPECT_NE(testing::RunSemslam({"synth", "--out", (dir / "x").string(), "--gps-noise", "-1"}).exit_code, 0);
   // A file where the folder should be.
   std::ofstream(dir / "file") << "x";
-  EXPECT_NE(RunSemslam("synth --out " + (dir / "file" / "sub").string() + " --frames 2", &output), 0);
-  EXPECT_NE(output.find("output folder"), std::string::npos) << output;
+  r = testing::RunSemslam({"synth", "--out", (dir / "file" / "sub").string(), "--frames", "2"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("output folder"), std::string::npos) << r.err;
   // A small run with the GPS options.
-  ASSERT_EQ(RunSemslam("synth --out " + (dir / "ok").string() +
-                           " --frames 2 --preset small --gps-every 2 --seed 3 -q",
-                       &output),
-            0)
-      << output;
+  r = testing::RunSemslam({"synth", "--out", (dir / "ok").string(), "--frames", "2", "--preset", "small",
+                           "--gps-every", "2", "--seed", "3", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
   EXPECT_TRUE(fs::exists(dir / "ok" / "sequences" / "00" / "image_1" / "000001.png"));
   EXPECT_EQ(ReadOxtsFolder(dir / "ok" / "oxts").size(), 1u);
-  const auto j = nlohmann::json::parse(ReadAll(dir / "ok" / "scene.json"));
+  const auto j = nlohmann::json::parse(testing::ReadText(dir / "ok" / "scene.json"));
   EXPECT_EQ(j["seed"], 3);
   EXPECT_EQ(j["options"]["preset"], "small");
 }

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace semslam::testing {
 
@@ -32,7 +33,34 @@ class TempDir {
 // Whether a missing shared-data folder must fail tests (CI sets SEMSLAM_REQUIRE_DATA=1) instead of skipping.
 bool SharedDataRequired();
 
+// How a run of the `semslam` binary ended, and what it printed.
+struct CommandResult {
+  int exit_code = -1;  // when the process exited
+  int signal = 0;      // when a signal ended it (a crash)
+  std::string out;     // stdout
+  std::string err;     // stderr
+  std::string command;
+
+  bool Crashed() const { return signal != 0; }
+  bool Succeeded() const { return signal == 0 && exit_code == 0; }
+  // For failure messages: the command, how it ended and the end of its stderr.
+  std::string Describe() const;
+};
+
+// Runs `semslam args...` (arguments passed as they are, no shell) with stdout and stderr captured through
+// files in a temporary directory.
+CommandResult RunSemslam(const std::vector<std::string>& args);
+
+// The bytes of a file ("" if it cannot be read).
+std::string ReadText(const std::filesystem::path& path);
+
 }  // namespace semslam::testing
+
+// Skips the test when the semslam binary has not been built.
+#define SEMSLAM_REQUIRE_BINARY()                                                                  \
+  if (!std::filesystem::exists(::semslam::testing::SemslamBinary())) {                            \
+    GTEST_SKIP() << "semslam binary not built: " << ::semslam::testing::SemslamBinary().string(); \
+  }
 
 // Skips the test (or fails it when SEMSLAM_REQUIRE_DATA=1) if ../shared/data/<relative> is missing, and
 // declares `var` as its path.

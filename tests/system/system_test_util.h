@@ -1,6 +1,6 @@
 #pragma once
-// Helpers of the end-to-end tests: running the `semslam` binary (arguments passed as they are, no shell),
-// reading what it wrote, and the datasets and runs that several tests share.
+// Helpers of the end-to-end tests: reading what the `semslam` binary wrote (it runs through RunSemslam of
+// support/test_support.h), and the datasets and runs that several tests share.
 //
 // CTest runs every test in a process of its own (and two at a time with -j2), so what several tests need is
 // made once into a cache directory under the build tree, keyed by the semslam binary (size and modification
@@ -16,27 +16,17 @@
 #include <string>
 #include <vector>
 
+#include "support/test_support.h"
+
 namespace semslam::system_test {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code = -1;  // when the process exited
-  int signal = 0;      // when a signal ended it (a crash)
-  std::string out;     // stdout
-  std::string err;     // stderr
-  std::string command;
+// Running the binary and reading files come from the shared test support.
+using testing::CommandResult;
+using testing::ReadText;
+using testing::RunSemslam;
 
-  bool Crashed() const { return signal != 0; }
-  bool Succeeded() const { return signal == 0 && exit_code == 0; }
-  // For failure messages: the command, how it ended and the end of its stderr.
-  std::string Describe() const;
-};
-
-// Runs `semslam args...` with stdout and stderr captured (through files in a temporary directory).
-CommandResult RunSemslam(const std::vector<std::string>& args);
-
-std::string ReadText(const fs::path& path);
 nlohmann::json ReadJson(const fs::path& path);
 // The lines of a text (a last line without '\n' counts; an empty text has none).
 std::vector<std::string> Lines(const std::string& text);
@@ -78,12 +68,6 @@ inline fs::path SequenceDir(const fs::path& dataset) { return dataset / "sequenc
 std::vector<int> FrameIndices(const std::vector<double>& timestamps, const std::vector<double>& times);
 
 }  // namespace semslam::system_test
-
-// Skips the test when the semslam binary has not been built.
-#define SEMSLAM_REQUIRE_BINARY()                                                                  \
-  if (!std::filesystem::exists(::semslam::testing::SemslamBinary())) {                            \
-    GTEST_SKIP() << "semslam binary not built: " << ::semslam::testing::SemslamBinary().string(); \
-  }
 
 // Declares `var` as the artifact's directory, failing the test when it could not be made.
 #define SEMSLAM_ASSERT_ARTIFACT(var, expression)                        \

@@ -2,10 +2,7 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "semslam/map/map_file.h"
@@ -15,20 +12,10 @@
 namespace semslam {
 namespace {
 
-namespace fs = std::filesystem;
+using testing::CommandResult;
 using ::testing::HasSubstr;
-
-int RunSemslam(const std::string& args, const fs::path& out, const fs::path& err) {
-  const std::string command =
-      testing::SemslamBinary().string() + " " + args + " > " + out.string() + " 2> " + err.string();
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string Read(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using testing::ReadText;
+using testing::RunSemslam;
 
 // An L-shaped drive: 100 m east past the Bakery, left, 80 m north to the School.
 TopologicalMap SmallMap() {
@@ -56,43 +43,34 @@ TopologicalMap SmallMap() {
 
 class RouteCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    if (!fs::exists(testing::SemslamBinary())) GTEST_SKIP() << "semslam binary not built";
-  }
+  void SetUp() override { SEMSLAM_REQUIRE_BINARY(); }
   testing::TempDir dir_;
-  fs::path out_ = dir_ / "out.txt";
-  fs::path err_ = dir_ / "err.txt";
 };
 
 TEST_F(RouteCli, PrintsStepsAndWritesGeoJson) {
   const TopologicalMap map = SmallMap();
   WriteTopologyJson(dir_ / "topology.json", map);
-  ASSERT_EQ(RunSemslam("route --map " + (dir_ / "topology.json").string() +
-                           " --from bakery --to 'Old School' --out " + (dir_ / "route.geojson").string(),
-                       out_, err_),
-            0)
-      << Read(err_);
-  const std::string text = Read(out_);
-  EXPECT_THAT(text, HasSubstr("Route from Bakery to Old School, 150 m:"));
-  EXPECT_THAT(text, HasSubstr("1. Start at Bakery, heading east."));
-  EXPECT_THAT(text, HasSubstr("2. Drive 70 m."));
-  EXPECT_THAT(text, HasSubstr("3. Turn left."));
-  EXPECT_THAT(text, HasSubstr("4. Drive 80 m to Old School (on your right)."));
-  const nlohmann::json route = nlohmann::json::parse(Read(dir_ / "route.geojson"));
+  const std::string topology = (dir_ / "topology.json").string();
+  CommandResult r = RunSemslam({"route", "--map", topology, "--from", "bakery", "--to", "Old School", "--out",
+                                (dir_ / "route.geojson").string()});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_THAT(r.out, HasSubstr("Route from Bakery to Old School, 150 m:"));
+  EXPECT_THAT(r.out, HasSubstr("1. Start at Bakery, heading east."));
+  EXPECT_THAT(r.out, HasSubstr("2. Drive 70 m."));
+  EXPECT_THAT(r.out, HasSubstr("3. Turn left."));
+  EXPECT_THAT(r.out, HasSubstr("4. Drive 80 m to Old School (on your right)."));
+  const nlohmann::json route = nlohmann::json::parse(ReadText(dir_ / "route.geojson"));
   EXPECT_EQ(route["features"][0]["properties"]["to"], "Old School");
 
-  ASSERT_EQ(RunSemslam("route --json --map " + (dir_ / "topology.json").string() +
-                           " --from Bakery --to 'Old School'",
-                       out_, err_),
-            0);
-  EXPECT_NEAR(nlohmann::json::parse(Read(out_))["length_m"].get<double>(), 150.0, 2.0);
+  r = RunSemslam({"route", "--json", "--map", topology, "--from", "Bakery", "--to", "Old School"});
+  ASSERT_EQ(r.exit_code, 0);
+  EXPECT_NEAR(nlohmann::json::parse(r.out)["length_m"].get<double>(), 150.0, 2.0);
 
-  EXPECT_EQ(RunSemslam("route --map " + (dir_ / "topology.json").string() + " --from Bakery --to Cinema",
-                       out_, err_),
-            2);
-  EXPECT_THAT(Read(err_), HasSubstr("unknown landmark 'Cinema'"));
-  EXPECT_EQ(RunSemslam("route --map " + (dir_ / "missing.json").string() + " --from A --to B", out_, err_),
-            1);
+  r = RunSemslam({"route", "--map", topology, "--from", "Bakery", "--to", "Cinema"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("unknown landmark 'Cinema'"));
+  r = RunSemslam({"route", "--map", (dir_ / "missing.json").string(), "--from", "A", "--to", "B"});
+  EXPECT_EQ(r.exit_code, 1);
 }
 
 TEST_F(RouteCli, ReadsTheMapFileSection) {
@@ -101,16 +79,15 @@ TEST_F(RouteCli, ReadsTheMapFileSection) {
   MapFileContents contents;
   contents.extra_sections["topology"] = TopologyJsonString(topology);
   WriteMapFile(dir_ / "map.semslam", empty, contents);
-  ASSERT_EQ(RunSemslam("route --map " + (dir_ / "map.semslam").string() + " --from Bakery --to 'Old School'",
-                       out_, err_),
-            0)
-      << Read(err_);
-  EXPECT_THAT(Read(out_), HasSubstr("Drive 80 m to Old School"));
+  CommandResult r = RunSemslam(
+      {"route", "--map", (dir_ / "map.semslam").string(), "--from", "Bakery", "--to", "Old School"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_THAT(r.out, HasSubstr("Drive 80 m to Old School"));
 
   WriteMapFile(dir_ / "bare.semslam", empty, {});
-  EXPECT_EQ(RunSemslam("route --map " + (dir_ / "bare.semslam").string() + " --from A --to B", out_, err_),
-            1);
-  EXPECT_THAT(Read(err_), HasSubstr("no topological map"));
+  r = RunSemslam({"route", "--map", (dir_ / "bare.semslam").string(), "--from", "A", "--to", "B"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("no topological map"));
 }
 
 }  // namespace
