@@ -238,18 +238,10 @@ std::vector<FramePose> SlamSystem::FramePoses() const {
   auto lock = map_->ReadLock();
   std::vector<FramePose> poses;
   for (const FrameRecord& record : tracker_->records()) {
-    if (record.reference == nullptr) continue;
-    // A culled reference keyframe hands its frames to its parent through the stored relative pose.
-    KeyFrame* kf = record.reference;
-    Rigid3d camera_from_kf = record.camera_from_reference;
-    while (kf->is_bad() && kf->parent() != nullptr) {
-      camera_from_kf = camera_from_kf * kf->camera_from_parent();
-      kf = kf->parent();
-    }
-    if (kf->is_bad()) continue;
-    const Rigid3d camera_from_world = camera_from_kf * kf->camera_from_world();
+    const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(record);
+    if (!camera_from_world) continue;
     poses.push_back(
-        {static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world.Inverse()});
+        {static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world->Inverse()});
   }
   return poses;
 }

@@ -108,6 +108,19 @@ std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, c
                        std::move(stereo.depth));
 }
 
+std::optional<Rigid3d> CurrentCameraFromWorld(const FrameRecord& record) {
+  if (record.reference == nullptr) return std::nullopt;
+  // A culled reference keyframe hands its frames to its parent through the stored relative pose.
+  KeyFrame* kf = record.reference;
+  Rigid3d camera_from_kf = record.camera_from_reference;
+  while (kf->is_bad() && kf->parent() != nullptr) {
+    camera_from_kf = camera_from_kf * kf->camera_from_parent();
+    kf = kf->parent();
+  }
+  if (kf->is_bad()) return std::nullopt;
+  return camera_from_kf * kf->camera_from_world();
+}
+
 TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                               const cv::Mat& right, const cv::Mat& mask) {
   Stopwatch watch;
@@ -129,7 +142,13 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     bool ok = false;
     if (state_ == TrackingState::kOk) {
       const bool map_changed = map_.big_change_index() != last_big_change_;
-      if (map_changed) last_big_change_ = map_.big_change_index();
+      if (map_changed) {
+        last_big_change_ = map_.big_change_index();
+        // A loop correction or global BA moved the map under the last frame: it follows its reference
+        // keyframe, or the search below would start metres off (3.5 m errors at a corner of the city).
+        const auto corrected = records_.empty() ? std::nullopt : CurrentCameraFromWorld(records_.back());
+        if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
+      }
       if (!velocity_ || map_changed || frame.id() < last_relocalization_frame_ + 2) {
         ok = TrackReferenceKeyFrame(frame);
       } else {

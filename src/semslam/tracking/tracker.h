@@ -80,6 +80,10 @@ struct FrameRecord {
   Rigid3d camera_from_reference;
 };
 
+// The frame's pose in the map as it stands now (through its reference keyframe, or the nearest parent of a
+// culled one); nullopt when the frame was not tracked. Read lock on the map held by the caller.
+std::optional<Rigid3d> CurrentCameraFromWorld(const FrameRecord& record);
+
 class Tracker {
  public:
   Tracker(const TrackerOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo,
