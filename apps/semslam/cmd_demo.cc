@@ -29,9 +29,7 @@ void Run(const DemoArgs& args) {
   options.second_drive_frames = args.second_drive;
   options.seed = args.seed;
   options.mode = args.mode;
-  options.pacing = args.pacing == "fast"          ? Pacing::kFast
-                   : args.pacing == "synchronous" ? Pacing::kSynchronous
-                                                  : Pacing::kRealtime;
+  options.pacing = ParsePacing(args.pacing).value();  // CLI11 checked the name
   options.segmenter = args.segmenter;
   options.show_progress = !args.quiet;
   const DemoSummary s = RunDemo(options);

@@ -31,8 +31,7 @@ void Run(const LocalizeArgs& args) {
   options.map = args.map;
   options.sequence = args.sequence;
   options.output = args.out;
-  options.slam.mode = args.mode == "stereo" ? SensorMode::kStereo : SensorMode::kMonocular;
-  options.slam.tracker.monocular = options.slam.mode == SensorMode::kMonocular;
+  options.slam.mode = ParseSensorMode(args.mode).value();  // CLI11 checked the name
   options.slam.pacing = Pacing::kFast;
   if (!args.config.empty()) ApplySlamConfig(args.config, &options.slam);
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;

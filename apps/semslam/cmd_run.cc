@@ -39,14 +39,9 @@ void Run(const RunArgs& args) {
   RunOptions options;
   options.sequence = args.sequence;
   options.output = args.out;
-  options.slam.mode = args.mode == "stereo" ? SensorMode::kStereo : SensorMode::kMonocular;
-  options.slam.tracker.monocular = options.slam.mode == SensorMode::kMonocular;
+  options.slam.mode = ParseSensorMode(args.mode).value();  // CLI11 checked the name
   if (!args.config.empty()) ApplySlamConfig(args.config, &options.slam);
-  if (!args.pacing.empty()) {
-    options.slam.pacing = args.pacing == "fast"       ? Pacing::kFast
-                          : args.pacing == "realtime" ? Pacing::kRealtime
-                                                      : Pacing::kSynchronous;
-  }
+  if (!args.pacing.empty()) options.slam.pacing = ParsePacing(args.pacing).value();
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
   if (args.no_loop_closing) options.slam.loop.enabled = false;
   options.slam.localization_only = args.localization_only;

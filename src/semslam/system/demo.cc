@@ -42,7 +42,7 @@ void DemoOptions::Check() const {
   Require(!output.empty(), "demo: --out must not be empty");
   Require(frames >= 100, "demo: --frames must be at least 100");
   Require(second_drive_frames >= 50, "demo: the second drive needs at least 50 frames");
-  Require(mode == "mono" || mode == "stereo", "demo: --mode must be mono or stereo");
+  Require(ParseSensorMode(mode).has_value(), "demo: --mode must be mono or stereo");
 }
 
 DemoSummary RunDemo(const DemoOptions& options) {
@@ -56,8 +56,7 @@ DemoSummary RunDemo(const DemoOptions& options) {
   RunOptions run;
   run.sequence = city;
   run.output = options.output / "run";
-  run.slam.mode = options.mode == "stereo" ? SensorMode::kStereo : SensorMode::kMonocular;
-  run.slam.tracker.monocular = run.slam.mode == SensorMode::kMonocular;
+  run.slam.mode = *ParseSensorMode(options.mode);  // checked by DemoOptions::Check
   run.slam.pacing = options.pacing;
   run.segmenter = options.segmenter;
   run.gps = city / "oxts";
@@ -71,7 +70,6 @@ DemoSummary RunDemo(const DemoOptions& options) {
   localize.sequence = drive2;
   localize.output = options.output / "localize";
   localize.slam.mode = run.slam.mode;
-  localize.slam.tracker.monocular = run.slam.tracker.monocular;
   localize.slam.pacing = Pacing::kFast;
   localize.show_progress = options.show_progress;
   spdlog::info("demo: a second drive relocalized against the map without GPS -> {}",

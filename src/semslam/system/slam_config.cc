@@ -26,22 +26,11 @@ Field Bind(T* value) {
 
 Field BindPacing(Pacing* pacing) {
   return {[pacing](const YAML::Node& node) {
-            const std::string s = node.as<std::string>();
-            if (s == "fast") {
-              *pacing = Pacing::kFast;
-            } else if (s == "realtime") {
-              *pacing = Pacing::kRealtime;
-            } else if (s == "synchronous") {
-              *pacing = Pacing::kSynchronous;
-            } else {
-              throw YAML::Exception(node.Mark(), "expected fast, realtime or synchronous");
-            }
+            const auto parsed = ParsePacing(node.as<std::string>());
+            if (!parsed) throw YAML::Exception(node.Mark(), "expected fast, realtime or synchronous");
+            *pacing = *parsed;
           },
-          [pacing](YAML::Emitter& out) {
-            out << (*pacing == Pacing::kFast       ? "fast"
-                    : *pacing == Pacing::kRealtime ? "realtime"
-                                                   : "synchronous");
-          }};
+          [pacing](YAML::Emitter& out) { out << std::string(PacingName(*pacing)); }};
 }
 
 Field BindPath(std::filesystem::path* path) {

@@ -13,12 +13,35 @@
 
 namespace semslam {
 
+std::optional<SensorMode> ParseSensorMode(std::string_view name) {
+  if (name == "mono") return SensorMode::kMonocular;
+  if (name == "stereo") return SensorMode::kStereo;
+  return std::nullopt;
+}
+
+std::optional<Pacing> ParsePacing(std::string_view name) {
+  if (name == "fast") return Pacing::kFast;
+  if (name == "realtime") return Pacing::kRealtime;
+  if (name == "synchronous") return Pacing::kSynchronous;
+  return std::nullopt;
+}
+
+std::string_view PacingName(Pacing pacing) {
+  switch (pacing) {
+    case Pacing::kFast:
+      return "fast";
+    case Pacing::kRealtime:
+      return "realtime";
+    case Pacing::kSynchronous:
+      return "synchronous";
+  }
+  return "realtime";
+}
+
 void SlamOptions::Check() const {
   tracker.Check();
   mapper.Check();
   loop.Check();
-  Require(tracker.monocular == (mode == SensorMode::kMonocular),
-          "slam: tracker mode disagrees with the sensor mode");
 }
 
 SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,

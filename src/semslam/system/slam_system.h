@@ -10,6 +10,7 @@
 #include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 
 #include "semslam/core/timing.h"
@@ -35,7 +36,14 @@ enum class SensorMode { kMonocular, kStereo };
 // after every keyframe (reproducible results for tests and evaluation).
 enum class Pacing { kFast, kRealtime, kSynchronous };
 
+// "mono"/"stereo" and "fast"/"realtime"/"synchronous", as on the command line and in config files;
+// nullopt for anything else.
+std::optional<SensorMode> ParseSensorMode(std::string_view name);
+std::optional<Pacing> ParsePacing(std::string_view name);
+std::string_view PacingName(Pacing pacing);
+
 struct SlamOptions {
+  // Sets tracker.monocular, mapper.monocular and loop.fix_scale (SlamSystem derives them).
   SensorMode mode = SensorMode::kMonocular;
   Pacing pacing = Pacing::kRealtime;
   TrackerOptions tracker;

@@ -1,0 +1,43 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "semslam/core/error.h"
+#include "semslam/system/slam_config.h"
+#include "semslam/system/slam_system.h"
+#include "support/test_support.h"
+
+namespace semslam {
+namespace {
+
+TEST(SlamOptions, ModeAndPacingNames) {
+  EXPECT_EQ(ParseSensorMode("mono"), SensorMode::kMonocular);
+  EXPECT_EQ(ParseSensorMode("stereo"), SensorMode::kStereo);
+  EXPECT_FALSE(ParseSensorMode("Stereo").has_value());
+  for (const Pacing pacing : {Pacing::kFast, Pacing::kRealtime, Pacing::kSynchronous})
+    EXPECT_EQ(ParsePacing(PacingName(pacing)), pacing);
+  EXPECT_EQ(PacingName(Pacing::kSynchronous), "synchronous");
+  EXPECT_FALSE(ParsePacing("slow").has_value());
+}
+
+TEST(SlamOptions, ConfigPacingReadWrittenAndRejected) {
+  testing::TempDir dir;
+  std::ofstream(dir / "good.yaml") << "tracking:\n  pacing: synchronous\n";
+  SlamOptions options;
+  ApplySlamConfig(dir / "good.yaml", &options);
+  EXPECT_EQ(options.pacing, Pacing::kSynchronous);
+  EXPECT_NE(SlamConfigToYaml(options).find("pacing: synchronous"), std::string::npos);
+
+  std::ofstream(dir / "bad.yaml") << "tracking:\n  pacing: slow\n";
+  try {
+    ApplySlamConfig(dir / "bad.yaml", &options);
+    FAIL() << "a bad pacing was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("fast, realtime or synchronous"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(options.pacing, Pacing::kSynchronous);
+}
+
+}  // namespace
+}  // namespace semslam
