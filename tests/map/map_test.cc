@@ -7,20 +7,11 @@
 
 #include "semslam/core/error.h"
 #include "semslam/map/map_file.h"
+#include "support/kitti_camera.h"
 #include "support/test_support.h"
 
 namespace semslam {
 namespace {
-
-PinholeCamera KittiLikeCamera() {
-  PinholeCamera c;
-  c.width = 1241;
-  c.height = 376;
-  c.fx = c.fy = 718.856;
-  c.cx = 620.0;
-  c.cy = 188.0;
-  return c;
-}
 
 // A frame with `n` keypoints on a grid, random descriptors, optional stereo depth.
 std::shared_ptr<const FrameData> MakeData(int n, std::uint64_t seed, bool stereo) {
@@ -45,8 +36,8 @@ std::shared_ptr<const FrameData> MakeData(int n, std::uint64_t seed, bool stereo
     }
   }
   std::optional<StereoRig> rig;
-  if (stereo) rig = StereoRig{KittiLikeCamera(), 0.54};
-  return MakeFrameData(KittiLikeCamera(), rig, std::move(features), std::move(right_u), std::move(depth));
+  if (stereo) rig = StereoRig{KittiCamera(), 0.54};
+  return MakeFrameData(KittiCamera(), rig, std::move(features), std::move(right_u), std::move(depth));
 }
 
 Frame MakeFrame(std::uint64_t id, int n, bool stereo, const Eigen::Vector3d& center) {
