@@ -203,8 +203,19 @@ TEST(LandmarksOsm, NamedNodesAndWaysNearTheTrajectory) {
   for (const Landmark& l : ReadLandmarksOsm(file, options)) names.push_back(l.name);
   EXPECT_THAT(names, ::testing::UnorderedElementsAre("Cafe Central", "Just A Name", "Old Library"));
 
+  // Read first and limited later (as semslam run does, before the trajectory exists): the same landmarks.
+  OsmLandmarkOptions unlimited = options;
+  unlimited.trajectory.clear();
+  names.clear();
+  for (const Landmark& l : KeepNearTrajectory(ReadLandmarksOsm(file, unlimited), options))
+    names.push_back(l.name);
+  EXPECT_THAT(names, ::testing::UnorderedElementsAre("Cafe Central", "Just A Name", "Old Library"));
+  EXPECT_TRUE(IsOsmCatalogue(file));
+  EXPECT_FALSE(IsOsmCatalogue(dir / "catalogue.csv"));
+
   options.radius_m = -1;
   EXPECT_THROW(ReadLandmarksOsm(file, options), InvalidArgument);
+  EXPECT_THROW(KeepNearTrajectory({}, options), InvalidArgument);
 }
 
 TEST(LandmarksOsm, ReadsPbf) {

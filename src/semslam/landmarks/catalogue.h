@@ -46,6 +46,13 @@ struct OsmLandmarkOptions {
 std::vector<Landmark> ReadLandmarksOsm(const std::filesystem::path& file,
                                        const OsmLandmarkOptions& options = {});
 
+// The landmarks ReadLandmarksOsm would keep for `options` (within radius_m of the trajectory; all when it is
+// empty), for a catalogue read before the trajectory was known.
+std::vector<Landmark> KeepNearTrajectory(std::vector<Landmark> landmarks, const OsmLandmarkOptions& options);
+
+// Whether ReadLandmarks reads `file` as OpenStreetMap (the only format limited to the trajectory).
+bool IsOsmCatalogue(const std::filesystem::path& file);
+
 // By extension: .csv; .geojson/.json; .osm, .osm.gz, .osm.bz2, .pbf, .osm.pbf.
 std::vector<Landmark> ReadLandmarks(const std::filesystem::path& file,
                                     const OsmLandmarkOptions& osm_options = {});

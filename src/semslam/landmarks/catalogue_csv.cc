@@ -128,14 +128,17 @@ std::vector<Landmark> ReadLandmarksCsv(const fs::path& file) {
   return landmarks;
 }
 
+bool IsOsmCatalogue(const fs::path& file) {
+  const std::string name = Lower(file.filename().string());
+  return EndsWith(name, ".osm") || EndsWith(name, ".pbf") || EndsWith(name, ".osm.gz") ||
+         EndsWith(name, ".osm.bz2") || EndsWith(name, ".osm.xml");
+}
+
 std::vector<Landmark> ReadLandmarks(const fs::path& file, const OsmLandmarkOptions& osm_options) {
   const std::string name = Lower(file.filename().string());
   if (EndsWith(name, ".csv") || EndsWith(name, ".txt")) return ReadLandmarksCsv(file);
   if (EndsWith(name, ".geojson") || EndsWith(name, ".json")) return ReadLandmarksGeoJson(file);
-  if (EndsWith(name, ".osm") || EndsWith(name, ".pbf") || EndsWith(name, ".osm.gz") ||
-      EndsWith(name, ".osm.bz2") || EndsWith(name, ".osm.xml")) {
-    return ReadLandmarksOsm(file, osm_options);
-  }
+  if (IsOsmCatalogue(file)) return ReadLandmarksOsm(file, osm_options);
   throw InputError(
       file,
       "unknown landmark catalogue format (expected .csv, .geojson, .json, .osm, .osm.gz, .osm.bz2 or "

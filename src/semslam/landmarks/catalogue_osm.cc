@@ -159,6 +159,13 @@ class LandmarkHandler : public osmium::handler::Handler {
 
 }  // namespace
 
+std::vector<Landmark> KeepNearTrajectory(std::vector<Landmark> landmarks, const OsmLandmarkOptions& options) {
+  options.Check();
+  const TrajectoryNeighbourhood near(options.trajectory, options.radius_m);
+  std::erase_if(landmarks, [&](const Landmark& l) { return !near.Near(l.position); });
+  return landmarks;
+}
+
 std::vector<Landmark> ReadLandmarksOsm(const fs::path& file, const OsmLandmarkOptions& options) {
   options.Check();
   if (!fs::is_regular_file(file)) throw InputError(file, "cannot open the OpenStreetMap file");

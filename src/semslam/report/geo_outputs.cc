@@ -170,12 +170,15 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
     summary.trajectory_frames = static_cast<int>(trajectory.size());
 
     // 3. Landmarks.
-    if (!inputs.landmarks_path.empty()) {
+    if (inputs.landmarks || !inputs.landmarks_path.empty()) {
       OsmLandmarkOptions osm;
       osm.radius_m = options.osm_radius_m;
       for (const FramePose& k : inputs.keyframes)
         osm.trajectory.push_back(g.MapToWgs84(k.world_from_camera.translation));
-      std::vector<Landmark> catalogue = ReadLandmarks(inputs.landmarks_path, osm);
+      std::vector<Landmark> catalogue = !inputs.landmarks ? ReadLandmarks(inputs.landmarks_path, osm)
+                                        : IsOsmCatalogue(inputs.landmarks_path)
+                                            ? KeepNearTrajectory(*inputs.landmarks, osm)
+                                            : *inputs.landmarks;
       MakeLandmarkNamesUnique(catalogue);
       out.landmarks = PlaceLandmarks(catalogue, g, keyframe_positions, options.landmarks);
       WriteLandmarksGeoJson(out_dir / "landmarks.geojson", out.landmarks, keyframe_positions,

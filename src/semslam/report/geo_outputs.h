@@ -30,12 +30,13 @@
 namespace semslam {
 
 struct GeoInputs {
-  std::vector<FramePose> frames;         // every tracked frame, in frame order (world_from_camera in the map)
-  std::vector<FramePose> keyframes;      // in frame order, keyframe_id set
-  std::vector<FusionEdge> edges;         // optional covisibility and loop edges (indices into keyframes)
-  std::optional<GpsLog> gps;             // the GPS log, or
-  std::filesystem::path gps_path;        // a KITTI oxts folder, CSV or NMEA file (read when `gps` is empty)
-  std::filesystem::path landmarks_path;  // CSV, GeoJSON or OSM catalogue; empty: none
+  std::vector<FramePose> frames;     // every tracked frame, in frame order (world_from_camera in the map)
+  std::vector<FramePose> keyframes;  // in frame order, keyframe_id set
+  std::vector<FusionEdge> edges;     // optional covisibility and loop edges (indices into keyframes)
+  std::optional<GpsLog> gps;         // the GPS log, or
+  std::filesystem::path gps_path;    // a KITTI oxts folder, CSV or NMEA file (read when `gps` is empty)
+  std::optional<std::vector<Landmark>> landmarks;  // the catalogue as read (OSM not yet limited), or
+  std::filesystem::path landmarks_path;  // CSV, GeoJSON or OSM catalogue (read when `landmarks` is empty)
   std::vector<LabeledPoint> points;      // labeled map points (map frame)
   bool monocular = true;                 // Sim(3) alignment and fusion; false: SE(3) (stereo)
   std::optional<Wgs84> enu_origin;       // default: the first GPS fix

@@ -116,9 +116,10 @@ RunSummary RunSequence(const RunOptions& options) {
     gps_log = ReadGps(options.gps);
     LogSkippedFixes(*gps_log);
   }
+  std::optional<std::vector<Landmark>> catalogue;
   if (!options.landmarks.empty()) {
-    const std::vector<Landmark> catalogue = ReadLandmarks(options.landmarks);
-    if (catalogue.empty()) throw InputError(options.landmarks, "the landmark catalogue holds no landmark");
+    catalogue = ReadLandmarks(options.landmarks);
+    if (catalogue->empty()) throw InputError(options.landmarks, "the landmark catalogue holds no landmark");
   }
   std::filesystem::create_directories(options.output);
   spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
@@ -170,6 +171,7 @@ RunSummary RunSequence(const RunOptions& options) {
   geo.keyframes = slam.KeyFramePoses();
   geo.edges = slam.KeyFrameEdges();
   geo.gps = gps_log;
+  geo.landmarks = std::move(catalogue);
   geo.landmarks_path = options.landmarks;
   geo.monocular = !stereo;
   for (const SemanticPoint& p : semantic_points) {
