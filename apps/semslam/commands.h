@@ -17,5 +17,6 @@ void AddEvalCommand(CLI::App& app);
 void AddVocabCommand(CLI::App& app);
 void AddSegmentCommand(CLI::App& app);
 void AddBenchCommand(CLI::App& app);
+void AddComposeCommand(CLI::App& app);
 
 }  // namespace semslam::cli

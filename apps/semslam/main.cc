@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   semslam::cli::AddVocabCommand(app);
   semslam::cli::AddSegmentCommand(app);
   semslam::cli::AddBenchCommand(app);
+  semslam::cli::AddComposeCommand(app);
 
   try {
     app.parse(argc, argv);

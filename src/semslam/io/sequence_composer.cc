@@ -1,0 +1,139 @@
+#include "semslam/io/sequence_composer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <opencv2/core.hpp>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/core/progress.h"
+#include "semslam/io/image_folder.h"
+#include "semslam/io/trajectory_io.h"
+
+namespace semslam {
+namespace fs = std::filesystem;
+namespace {
+
+size_t ParseFrame(std::string_view text, std::string_view part) {
+  size_t value = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  Require(!text.empty() && ec == std::errc() && ptr == text.data() + text.size(),
+          fmt::format("frame list: '{}' in '{}' is not a frame number or a range A-B", text, part));
+  return value;
+}
+
+// The source's frame interval: the median difference of its timestamps (0.1 s when it has one frame).
+double FrameInterval(const ImageSequence& source) {
+  std::vector<double> steps;
+  for (size_t i = 1; i < source.size(); ++i) steps.push_back(source.Timestamp(i) - source.Timestamp(i - 1));
+  if (steps.empty()) return 0.1;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  const double step = steps[steps.size() / 2];
+  return step > 0 ? step : 0.1;
+}
+
+// The ground-truth pose of each source frame (by timestamp), when the source has a ground truth for all of
+// them.
+std::optional<std::vector<Rigid3d>> TruthByFrame(const ImageSequence& source) {
+  const std::optional<Trajectory> truth = source.GroundTruth();
+  if (!truth || truth->empty()) return std::nullopt;
+  std::vector<Rigid3d> poses;
+  for (size_t i = 0; i < source.size(); ++i) {
+    const double t = source.Timestamp(i);
+    const auto it = std::lower_bound(truth->begin(), truth->end(), t - 1e-4,
+                                     [](const StampedPose& p, double value) { return p.timestamp < value; });
+    if (it == truth->end() || std::abs(it->timestamp - t) > 1e-4) return std::nullopt;
+    poses.push_back(it->world_from_camera);
+  }
+  return poses;
+}
+
+}  // namespace
+
+std::vector<size_t> ParseFrameList(std::string_view text) {
+  std::vector<size_t> frames;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string_view part = text.substr(start, comma - start);
+    Require(!part.empty(), fmt::format("frame list '{}' has an empty part", text));
+    const size_t dash = part.find('-');
+    if (dash == std::string_view::npos) {
+      frames.push_back(ParseFrame(part, text));
+    } else {
+      const size_t a = ParseFrame(part.substr(0, dash), text), b = ParseFrame(part.substr(dash + 1), text);
+      if (a <= b) {
+        for (size_t f = a; f <= b; ++f) frames.push_back(f);
+      } else {
+        for (size_t f = a + 1; f-- > b;) frames.push_back(f);
+      }
+    }
+    start = comma + 1;
+  }
+  return frames;
+}
+
+std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size_t black_first,
+                                         size_t black_end) {
+  std::vector<ComposedFrame> composed;
+  for (size_t i = 0; i < frames.size(); ++i)
+    composed.push_back({frames[i], i >= black_first && i < black_end});
+  return composed;
+}
+
+void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
+                           const fs::path& out, bool stereo) {
+  Require(!frames.empty(), "compose: no frames");
+  for (const ComposedFrame& f : frames) {
+    if (f.source_frame >= source.size()) {
+      throw InputError(source.directory(), fmt::format("compose: the sequence has no frame {} (it has {})",
+                                                       f.source_frame, source.size()));
+    }
+  }
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec))
+    throw InputError(out, "compose: the output folder is not empty");
+  stereo = stereo && source.stereo().has_value();
+  fs::create_directories(out / "left");
+  if (stereo) fs::create_directories(out / "right");
+
+  const double dt = FrameInterval(source);
+  const std::optional<std::vector<Rigid3d>> truth = TruthByFrame(source);
+  std::string times, poses;
+  std::vector<Rigid3d> truth_out;
+  ProgressReporter progress("compose", frames.size(), true);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const ComposedFrame& f = frames[i];
+    const std::string name = fmt::format("{:06d}.png", i);
+    for (int camera = 0; camera < (stereo ? 2 : 1); ++camera) {
+      cv::Mat image = source.LoadImage(f.source_frame, camera);
+      if (f.black) image = cv::Mat::zeros(image.size(), image.type());
+      WritePng(out / (camera == 0 ? "left" : "right") / name, image);
+    }
+    times += fmt::format("{:.6f}\n", static_cast<double>(i) * dt);
+    if (truth)
+      truth_out.push_back((*truth)[frames.front().source_frame].Inverse() * (*truth)[f.source_frame]);
+    progress.Update(i + 1, "");
+  }
+  progress.Finish(fmt::format("{} frames", frames.size()));
+  WriteFileAtomically(out / "times.txt", times);
+  CameraYaml yaml;
+  yaml.camera = source.camera();
+  yaml.images = out / "left";
+  yaml.times = out / "times.txt";
+  yaml.name = source.name() + "-composed";
+  if (stereo) {
+    yaml.baseline = source.stereo()->baseline;
+    yaml.right_images = out / "right";
+  }
+  if (truth) {
+    WriteKittiPoses(out / "gt.txt", truth_out);
+    yaml.ground_truth = out / "gt.txt";
+  }
+  WriteCameraYaml(out / "camera.yaml", yaml);
+}
+
+}  // namespace semslam

@@ -1,0 +1,39 @@
+#pragma once
+// Sequences made of another one's frames in another order: a drive played forwards and backwards as one
+// (it revisits every place, and the camera turns around), cut hard (frames left out: the camera jumps), or
+// blacked out for a while (the camera sees nothing). They test what no recorded drive holds: losing
+// tracking, starting new maps and merging them. The result is an image folder with camera.yaml (see
+// image_folder.h): the images, times at the source's frame rate, and the ground truth when the source has
+// one.
+
+#include <cstddef>
+#include <filesystem>
+#include <string_view>
+#include <vector>
+
+#include "semslam/io/sequence.h"
+
+namespace semslam {
+
+// One frame of a composed sequence: a frame of the source, or a black image.
+struct ComposedFrame {
+  size_t source_frame = 0;
+  bool black = false;
+};
+
+// Parses a frame list: comma-separated ranges "A-B" (inclusive; A > B runs backwards) or single frames,
+// e.g. "0-159,158-0,1-159". Throws InvalidArgument naming the bad part.
+std::vector<size_t> ParseFrameList(std::string_view text);
+
+// The composed frames: `frames` in order, with those at composed positions [black_first, black_end)
+// black.
+std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size_t black_first = 0,
+                                         size_t black_end = 0);
+
+// Writes the composed sequence into `out` (created; it must be empty or missing): images (left, and right
+// when `stereo` and the source has a second camera), times.txt, gt.txt (KITTI poses, when the source has a
+// ground truth) and camera.yaml. Throws InputError for frames the source does not have.
+void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
+                           const std::filesystem::path& out, bool stereo);
+
+}  // namespace semslam
