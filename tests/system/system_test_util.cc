@@ -167,6 +167,12 @@ Artifact TinyStereoRun() {
   return Run("tiny_stereo_run", Synthetic("city6", 6), {"--mode", "stereo", "--pacing", "synchronous"});
 }
 
+std::vector<double> Timestamps(const Trajectory& trajectory) {
+  std::vector<double> stamps;
+  for (const StampedPose& p : trajectory) stamps.push_back(p.timestamp);
+  return stamps;
+}
+
 std::vector<int> FrameIndices(const std::vector<double>& timestamps, const std::vector<double>& times) {
   std::vector<int> indices;
   for (const double t : timestamps) {

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "semslam/geometry/trajectory.h"
 #include "support/test_support.h"
 
 namespace semslam::system_test {
@@ -63,6 +64,8 @@ Artifact TinyStereoRun();
 // The sequence folder of a synthetic dataset.
 inline fs::path SequenceDir(const fs::path& dataset) { return dataset / "sequences" / "00"; }
 
+// The timestamps of a trajectory, in order.
+std::vector<double> Timestamps(const Trajectory& trajectory);
 // Frame index of each timestamp of a trajectory file (TUM), through the sequence's times.txt (within 1 ms);
 // -1 where none matches.
 std::vector<int> FrameIndices(const std::vector<double>& timestamps, const std::vector<double>& times);

@@ -70,7 +70,8 @@ void InitializationMatchOptions::Check() const {
   Require(ratio > 0.0f && ratio <= 1.0f, "initialization matching: ratio must be in (0, 1]");
   Require(max_distance >= 0 && max_distance <= 256,
           "initialization matching: max_distance must be in [0, 256]");
-  Require(max_level >= 0, "initialization matching: max_level must be >= 0");
+  Require(max_level >= 0 && max_level_difference >= 0,
+          "initialization matching: max_level and max_level_difference must be >= 0");
 }
 
 std::vector<int> MatchForInitialization(const FeatureSet& f1, const FeatureSet& f2,
@@ -92,9 +93,11 @@ std::vector<int> MatchForInitialization(const FeatureSet& f1, const FeatureSet& 
   std::vector<int> distance21(f2.size(), INT_MAX);
   std::vector<int> candidates;
   for (size_t i = 0; i < f1.size(); ++i) {
-    if (f1.keypoints[i].level > options.max_level) continue;
+    const int level = f1.keypoints[i].level;
+    if (level > options.max_level) continue;
     const Eigen::Vector2f& prior = prior_positions[i];
-    grid2.FeaturesInArea(prior.x(), prior.y(), window, 0, options.max_level, candidates);
+    grid2.FeaturesInArea(prior.x(), prior.y(), window, std::max(0, level - options.max_level_difference),
+                         std::min(options.max_level, level + options.max_level_difference), candidates);
     if (candidates.empty()) continue;
     const BestTwo best = FindBestTwo(f1.descriptors[i], candidates, f2.descriptors);
     if (!best.found() || best.best > options.max_distance || !best.PassesRatio(options.ratio)) continue;

@@ -77,6 +77,8 @@ struct InitializationMatchOptions {
   int max_distance = MatcherThresholds::kLow;  // Hamming
   bool check_orientation = true;
   int max_level = 0;  // only keypoints of levels [0, max_level] in both frames
+  // A keypoint of level l is matched to levels [l - d, l + d] (the scale changes as the camera moves on).
+  int max_level_difference = 0;
   void Check() const;
 };
 

@@ -3,6 +3,7 @@
 // landmark association and the topological map.
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "semslam/geometry/eigen_types.h"
@@ -26,6 +27,8 @@ struct FramePose {
   long long keyframe_id = -1;
   double timestamp = 0.0;
   Rigid3d world_from_camera;  // map_from_camera; its translation is the camera centre
+  std::uint32_t map_id = 0;   // which map of the atlas the pose is in (see map/map.h)
+  bool predicted = false;     // not tracked: the motion model's prediction while tracking was lost
 
   FramePosition Position() const {
     return FramePosition{frame_index, keyframe_id, timestamp, world_from_camera.translation};

@@ -34,8 +34,8 @@ void LoopCloserOptions::Check() const {
   Require(min_bow_matches >= 3 && min_sim3_inliers >= 3 && min_projected_matches >= 3,
           "loop closer: match thresholds must be >= 3");
   Require(global_ba_iterations > 0, "loop closer: global_ba_iterations must be positive");
-  Require(max_correction_ratio > 0 && max_correction_deg > 0,
-          "loop closer: max_correction_ratio and max_correction_deg must be positive");
+  Require(min_verified_neighbours >= 0 && min_verified_neighbours <= 5 && verification_matches >= 3,
+          "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -71,7 +71,7 @@ void LoopCloser::Join() {
 }
 
 void LoopCloser::InsertKeyFrame(KeyFrame* keyframe) {
-  if (!options_.enabled || keyframe->id() == 0) return;
+  if (!options_.enabled || keyframe->is_map_origin()) return;
   {
     std::lock_guard lock(queue_mutex_);
     queue_.push_back(keyframe);
@@ -97,7 +97,20 @@ void LoopCloser::Reset() {
 
 std::vector<LoopEvent> LoopCloser::loops() const {
   std::lock_guard lock(loops_mutex_);
-  return loops_;
+  std::vector<LoopEvent> out;
+  for (const LoopEvent& e : events_) {
+    if (!e.merge) out.push_back(e);
+  }
+  return out;
+}
+
+std::vector<LoopEvent> LoopCloser::merges() const {
+  std::lock_guard lock(loops_mutex_);
+  std::vector<LoopEvent> out;
+  for (const LoopEvent& e : events_) {
+    if (e.merge) out.push_back(e);
+  }
+  return out;
 }
 
 void LoopCloser::Run() {
@@ -165,6 +178,7 @@ bool LoopCloser::DetectLoop(KeyFrame* current) {
   candidate_options.min_score = min_score;
   candidate_options.excluded = {current->id()};
   for (KeyFrame* kf : covisibles) candidate_options.excluded.insert(kf->id());
+  if (!options_.merge_maps) candidate_options.map_id = current->map_id();
   const std::vector<KeyFrame*> candidates =
       FindPlaceCandidates(current->bow, database_, map_, candidate_options);
   if (candidates.empty()) {
@@ -257,11 +271,8 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
         RefineSim3(*current, *candidate, guided, &current_from_candidate, 10.0, options_.fix_scale);
     if (inliers < options_.min_sim3_inliers) continue;
 
-    const Sim3d corrected_current_from_world =
-        current_from_candidate * ToSim3(candidate->camera_from_world());
-    if (!CorrectionIsPlausible(current, candidate, corrected_current_from_world)) continue;
     matched_keyframe_ = candidate;
-    current_from_world_ = corrected_current_from_world;
+    current_from_world_ = current_from_candidate * ToSim3(candidate->camera_from_world());
     // Points around the matched place, projected into the current keyframe for more matches.
     loop_points_.clear();
     std::set<MapPoint*> unique;
@@ -277,7 +288,16 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     last_matches_ =
         static_cast<int>(std::count_if(current_matched_points_.begin(), current_matched_points_.end(),
                                        [](MapPoint* p) { return p != nullptr; }));
-    if (last_matches_ >= options_.min_projected_matches) {
+    if (last_matches_ < options_.min_projected_matches) continue;
+    last_verified_ = CountVerifiedNeighbours(current);
+    if (last_verified_ < options_.min_verified_neighbours) {
+      spdlog::info(
+          "loop candidate: keyframe {} with keyframe {} ({} matches) not confirmed by its neighbours "
+          "({} of {} needed)",
+          current->id(), candidate->id(), last_matches_, last_verified_, options_.min_verified_neighbours);
+      continue;
+    }
+    {
       lock.unlock();
       auto write = map_.WriteLock();
       for (KeyFrame* kf : enough_consistent_candidates_) {
@@ -289,37 +309,47 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
   return false;
 }
 
-bool LoopCloser::CorrectionIsPlausible(const KeyFrame* current, const KeyFrame* candidate,
-                                       const Sim3d& corrected_current_from_world) const {
-  // Distance driven between the two ends, along the keyframes in between (map units).
-  double travelled = 0.0;
-  const KeyFrame* previous = nullptr;
-  for (std::uint64_t id = candidate->id(); id <= current->id(); ++id) {
-    const KeyFrame* kf = map_.KeyFrameById(id);
-    if (kf == nullptr || kf->is_bad()) continue;
-    if (previous != nullptr) travelled += (kf->center() - previous->center()).norm();
-    previous = kf;
+int LoopCloser::CountVerifiedNeighbours(const KeyFrame* current) const {
+  const Rigid3d world_from_current = current->world_from_camera();
+  int verified = 0;
+  for (KeyFrame* neighbour : current->BestCovisibles(5)) {
+    if (neighbour->is_bad()) continue;
+    // Where the loop puts the neighbour: its pose relative to the current keyframe, after the correction.
+    const Sim3d corrected = ToSim3(neighbour->camera_from_world() * world_from_current) * current_from_world_;
+    std::vector<MapPoint*> matched(neighbour->num_features(), nullptr);
+    const int found = SearchBySim3Projection(*neighbour, corrected, loop_points_, matched, 10);
+    if (found >= options_.verification_matches) ++verified;
   }
-  const Rigid3d corrected = ToRigid(corrected_current_from_world);
-  const double shift = (corrected.Inverse().translation - current->center()).norm();
-  const double turn_deg = (corrected.rotation * current->world_from_camera().rotation)
-                              .angularDistance(Eigen::Quaterniond::Identity()) *
-                          180.0 / M_PI;
-  const double max_shift = options_.max_correction_ratio * travelled;
-  const double max_turn_deg = options_.max_correction_deg;
-  if (shift <= max_shift && turn_deg <= max_turn_deg) return true;
-  spdlog::info(
-      "loop candidate: keyframe {} with keyframe {} rejected: it would move the keyframe {:.1f} (limit "
-      "{:.1f}) and "
-      "turn it {:.1f} deg (limit {:.1f}) after {:.1f} travelled",
-      current->id(), candidate->id(), shift, max_shift, turn_deg, max_turn_deg, travelled);
-  return false;
+  return verified;
+}
+
+double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
+  // current_from_world_ is the current keyframe's pose in the matched map's frame: the same transform takes
+  // every pose and point of its map there (with the scale between the two, monocular).
+  const std::uint32_t from = current->map_id(), into = matched_keyframe_->map_id();
+  const Sim3d into_from_current_map = current_from_world_.Inverse() * ToSim3(current->camera_from_world());
+  const Sim3d current_map_from_into = into_from_current_map.Inverse();
+  for (MapPoint* p : map_.MapPointsOfMap(from)) {
+    p->SetPosition(into_from_current_map * p->position());
+    p->UpdateNormalAndDepth();
+  }
+  for (KeyFrame* kf : map_.KeyFramesOfMap(from)) {
+    kf->SetPose(ToRigid(ToSim3(kf->camera_from_world()) * current_map_from_into));
+  }
+  map_.MergeMapInto(from, into);
+  spdlog::info("map {} moved into the frame of map {} (scale {:.3f}) and merged", from, into,
+               into_from_current_map.scale);
+  return into_from_current_map.scale;
 }
 
 void LoopCloser::CorrectLoop(KeyFrame* current) {
   ScopedTimer timer(timing_, "loop_correction");
-  spdlog::info("loop detected: keyframe {} matches keyframe {} ({} matches)", current->id(),
-               matched_keyframe_->id(), last_matches_);
+  const bool merge = matched_keyframe_->map_id() != current->map_id();
+  spdlog::info(
+      "{} detected: keyframe {} (map {}) matches keyframe {} (map {}), {} matches, confirmed by {} "
+      "neighbours",
+      merge ? "map merge" : "loop", current->id(), current->map_id(), matched_keyframe_->id(),
+      matched_keyframe_->map_id(), last_matches_, last_verified_);
   mapper_.RequestStop();
   StopGlobalBundleAdjustment();
   while (!mapper_.IsStopped() && !mapper_.IsFinished())
@@ -330,12 +360,17 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   event.matched_keyframe = matched_keyframe_->id();
   event.query_timestamp = current->timestamp();
   event.matches = last_matches_;
+  event.verified_neighbours = last_verified_;
   event.scale = current_from_world_.scale;
+  event.merge = merge;
+  event.map_id = current->map_id();
+  event.matched_map_id = matched_keyframe_->map_id();
 
   std::map<KeyFrame*, std::set<KeyFrame*>> loop_connections;
   std::map<KeyFrame*, Sim3d> corrected, non_corrected;
   {
     auto lock = map_.WriteLock();
+    if (merge) event.scale = MoveMapToMatchedFrame(current);
     current->UpdateConnections();
     std::vector<KeyFrame*> connected = current->Covisibles();
     connected.push_back(current);
@@ -408,13 +443,14 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   }
   {
     std::lock_guard lock(loops_mutex_);
-    loops_.push_back(event);
+    events_.push_back(event);
   }
   if (options_.global_ba) {
     global_ba_abort_ = false;
     global_ba_running_ = true;
     const std::uint64_t id = current->id();
-    global_ba_thread_ = std::thread([this, id] { RunGlobalBundleAdjustment(id); });
+    const std::uint32_t map_id = current->map_id();
+    global_ba_thread_ = std::thread([this, id, map_id] { RunGlobalBundleAdjustment(id, map_id); });
   }
   mapper_.Release();
   last_loop_keyframe_id_ = current->id();
@@ -426,7 +462,7 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
                                         const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections) {
   ScopedTimer timer(timing_, "essential_graph");
   constexpr int kMinWeight = 100;
-  const std::vector<KeyFrame*> keyframes = map_.KeyFrames();
+  const std::vector<KeyFrame*> keyframes = map_.KeyFramesOfMap(current->map_id());
   PoseGraph graph;
   std::unordered_map<const KeyFrame*, int> node;
   std::unordered_map<const KeyFrame*, Sim3d> before;  // camera_from_world used for relative measurements
@@ -436,7 +472,7 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     const Sim3d camera_from_world = c != corrected.end() ? c->second : ToSim3(kf->camera_from_world());
     const auto nc = non_corrected.find(kf);
     before[kf] = nc != non_corrected.end() ? nc->second : ToSim3(kf->camera_from_world());
-    node[kf] = graph.AddNode(camera_from_world.Inverse(), kf == loop_keyframe || kf->id() == 0);
+    node[kf] = graph.AddNode(camera_from_world.Inverse(), kf == loop_keyframe || kf->is_map_origin());
   }
   std::set<std::pair<int, int>> added;
   auto add_edge = [&](KeyFrame* a, KeyFrame* b, bool use_corrected) {
@@ -481,7 +517,7 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     change[kf->id()] = {before[kf], world_from_kf};
     const_cast<KeyFrame*>(kf)->SetPose(ToRigid(camera_from_world));
   }
-  for (MapPoint* p : map_.MapPoints()) {
+  for (MapPoint* p : map_.MapPointsOfMap(current->map_id())) {
     if (p->is_bad()) continue;
     const std::uint64_t ref = p->corrected_by_keyframe == current->id()
                                   ? p->corrected_reference
@@ -503,16 +539,16 @@ void LoopCloser::StopGlobalBundleAdjustment() {
   global_ba_thread_.join();
 }
 
-void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
+void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
   ScopedTimer timer(timing_, "global_ba");
-  spdlog::info("global bundle adjustment after the loop at keyframe {}", loop_keyframe_id);
+  spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
   BundleAdjustmentProblem problem;
   std::vector<KeyFrame*> keyframes;
   std::vector<MapPoint*> points;
   {
     auto lock = map_.ReadLock();
-    keyframes = map_.KeyFrames();
-    for (MapPoint* p : map_.MapPoints()) {
+    keyframes = map_.KeyFramesOfMap(map_id);
+    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
       if (!p->is_bad()) points.push_back(p);
     }
     BuildBundleAdjustmentProblem(keyframes, {}, points, &problem, nullptr);
@@ -537,16 +573,11 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
     for (size_t i = 0; i < keyframes.size(); ++i) in_ba[keyframes[i]] = i;
     // Corrections before -> after per keyframe, propagated down the spanning tree.
     std::unordered_map<const KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
-    std::vector<KeyFrame*> stack;
-    for (KeyFrame* kf : map_.KeyFrames()) {
-      if (kf->id() == 0) stack.push_back(kf);
-    }
     for (size_t i = 0; i < keyframes.size(); ++i) {
       if (keyframes[i]->is_bad()) continue;
       correction[keyframes[i]] = {keyframes[i]->camera_from_world(), problem.camera_from_world[i]};
     }
-    std::vector<KeyFrame*> order = map_.KeyFrames();
-    for (KeyFrame* kf : order) {
+    for (KeyFrame* kf : map_.KeyFramesOfMap(map_id)) {
       if (kf->is_bad() || correction.count(kf)) continue;
       // Walk up to an ancestor that has a correction.
       std::vector<KeyFrame*> chain = {kf};
@@ -567,7 +598,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id) {
     for (const auto& [kf, c] : correction) const_cast<KeyFrame*>(kf)->SetPose(c.second);
     std::unordered_map<const MapPoint*, size_t> point_index;
     for (size_t j = 0; j < points.size(); ++j) point_index[points[j]] = j;
-    for (MapPoint* p : map_.MapPoints()) {
+    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
       if (p->is_bad()) continue;
       const auto it = point_index.find(p);
       if (it != point_index.end()) {

@@ -1,8 +1,10 @@
 #pragma once
 // The loop-closing thread: detects when the camera returns to a mapped place (bag-of-words candidates with
 // covisibility consistency over consecutive keyframes), computes the Sim(3) (monocular) or SE(3) (stereo)
-// between the two ends, fuses the duplicated points, corrects the essential graph, and refines the whole
-// map with a global bundle adjustment in the background.
+// between the two ends, verifies it in the current keyframe's neighbours, fuses the duplicated points,
+// corrects the essential graph, and refines the whole map with a global bundle adjustment in the
+// background. A place of another map of the atlas (see map/map.h) merges the two maps: the active one is
+// moved into the other's frame by the same transform, then corrected as a loop.
 
 #include <atomic>
 #include <condition_variable>
@@ -31,12 +33,13 @@ struct LoopCloserOptions {
   int min_bow_matches = 20;
   int min_sim3_inliers = 20;
   int min_projected_matches = 40;
-  // A loop may correct the current keyframe by at most this fraction of the distance driven since the matched
-  // keyframe, and turn it by at most max_correction_deg: drift grows with distance (a few percent, monocular
-  // scale drift included), while a place that only looks the same (repeated facades, symmetric crossings)
-  // asks for a jump.
-  double max_correction_ratio = 0.1;
-  double max_correction_deg = 20.0;
+  // Geometric verification: the matched place, moved by the loop's transform, must also be found in this
+  // many of the current keyframe's best covisible keyframes (up to 5 are tried), with at least
+  // verification_matches matches each. A place that only looks the same (a repeated facade) agrees with
+  // one view, not with the views around it.
+  int min_verified_neighbours = 2;
+  int verification_matches = 20;
+  bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
   int global_ba_iterations = 10;
   bool enabled = true;
@@ -49,8 +52,12 @@ struct LoopEvent {
   std::uint64_t matched_keyframe = 0;
   double query_timestamp = 0.0;
   int matches = 0;
-  double scale = 1.0;         // of the correction (monocular drift)
-  double correction_m = 0.0;  // how far the query keyframe moved
+  int verified_neighbours = 0;  // covisible keyframes that confirmed the place
+  double scale = 1.0;           // of the correction (monocular drift) or of the merged map
+  double correction_m = 0.0;    // how far the query keyframe moved
+  bool merge = false;           // a merge of two maps rather than a loop in one
+  std::uint32_t map_id = 0;     // the query keyframe's map (the one merged away, for a merge)
+  std::uint32_t matched_map_id = 0;
 };
 
 class LoopCloser {
@@ -68,21 +75,25 @@ class LoopCloser {
   void WaitUntilIdle();
   void Reset();
 
-  std::vector<LoopEvent> loops() const;
+  std::vector<LoopEvent> loops() const;   // loops closed within a map
+  std::vector<LoopEvent> merges() const;  // maps merged
   int num_global_ba() const { return num_global_ba_.load(); }
 
  private:
   void Run();
   bool DetectLoop(KeyFrame* current);
   bool ComputeSim3(KeyFrame* current);
-  bool CorrectionIsPlausible(const KeyFrame* current, const KeyFrame* candidate,
-                             const Sim3d& corrected_current_from_world) const;
+  // How many of the current keyframe's best covisibles find loop_points_ where current_from_world_ puts them.
+  int CountVerifiedNeighbours(const KeyFrame* current) const;
+  // Moves the current keyframe's map into the matched keyframe's frame (write lock held); returns the
+  // event's scale.
+  double MoveMapToMatchedFrame(KeyFrame* current);
   void CorrectLoop(KeyFrame* current);
   void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
                               const std::map<KeyFrame*, Sim3d>& non_corrected,
                               const std::map<KeyFrame*, Sim3d>& corrected,
                               const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections);
-  void RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id);
+  void RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id);
   void StopGlobalBundleAdjustment();
 
   LoopCloserOptions options_;
@@ -114,9 +125,10 @@ class LoopCloser {
   std::vector<MapPoint*> current_matched_points_;
   std::vector<MapPoint*> loop_points_;
   int last_matches_ = 0;
+  int last_verified_ = 0;
 
   mutable std::mutex loops_mutex_;
-  std::vector<LoopEvent> loops_;
+  std::vector<LoopEvent> events_;  // loops and merges, in order
 
   std::thread global_ba_thread_;
   std::atomic<bool> global_ba_running_{false};

@@ -172,7 +172,7 @@ void KeyFrame::SetErase() {
 }
 
 void KeyFrame::SetBad() {
-  if (id_ == 0 || bad_) return;
+  if (map_origin_ || bad_) return;
   if (not_erase_) {
     to_be_erased_ = true;
     return;

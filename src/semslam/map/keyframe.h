@@ -30,6 +30,12 @@ class KeyFrame {
   std::uint64_t id() const { return id_; }
   std::uint64_t frame_id() const { return frame_id_; }
   double timestamp() const { return timestamp_; }
+  // The session (drive) that made this keyframe, and the map it belongs to: a Map may hold several
+  // disconnected maps (see map.h); a merge moves a keyframe into another map.
+  std::uint32_t session() const { return session_; }
+  std::uint32_t map_id() const { return map_id_; }
+  // The first keyframe of its map: it fixes the map's frame in optimizations and is never culled.
+  bool is_map_origin() const { return map_origin_; }
 
   // The frame data: features (undistorted pixel coordinates), stereo, grid, bag of words.
   const FrameData& data() const { return *data_; }
@@ -71,8 +77,8 @@ class KeyFrame {
   bool is_bad() const { return bad_; }
   void SetNotErase() { not_erase_ = true; }
   void SetErase();
-  // Disconnects the keyframe from the graph and its points, re-parents its children. The first keyframe
-  // is never erased.
+  // Disconnects the keyframe from the graph and its points, re-parents its children. A map's origin is
+  // never erased.
   void SetBad();
   // Marks the keyframe bad without touching the graph (the whole map is being reset).
   void MarkBadForReset() { bad_ = true; }
@@ -116,11 +122,15 @@ class KeyFrame {
 
  private:
   friend class MapSerializer;
+  friend class Map;
   void UpdateBestCovisibles();
 
   const std::uint64_t id_;
   const std::uint64_t frame_id_;
   const double timestamp_;
+  std::uint32_t session_ = 0;
+  std::uint32_t map_id_ = 0;
+  bool map_origin_ = false;
   std::shared_ptr<const FrameData> data_;
   Rigid3d camera_from_world_;
   Rigid3d world_from_camera_;

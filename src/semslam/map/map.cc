@@ -1,12 +1,18 @@
 #include "semslam/map/map.h"
 
 #include <algorithm>
+#include <set>
+
+#include "semslam/core/error.h"
 
 namespace semslam {
 
 KeyFrame* Map::AddKeyFrame(const Frame& frame) {
   all_keyframes_.push_back(std::make_unique<KeyFrame>(next_keyframe_id_++, frame));
   KeyFrame* keyframe = all_keyframes_.back().get();
+  keyframe->session_ = current_session_;
+  keyframe->map_id_ = active_map_id_;
+  keyframe->map_origin_ = NumKeyFramesOfMap(active_map_id_) == 0;
   keyframes_.insert(keyframe);
   keyframe_by_id_[keyframe->id()] = keyframe;
   return keyframe;
@@ -50,6 +56,96 @@ void Map::Clear() {
   points_.clear();
   recent_points.clear();
   ++big_change_index_;
+}
+
+std::uint32_t Map::BeginSession(std::string name, std::string source) {
+  const auto id = static_cast<std::uint32_t>(sessions_.size());
+  sessions_.push_back({id, std::move(name), std::move(source)});
+  current_session_ = id;
+  return id;
+}
+
+void Map::NameCurrentSession(std::string name, std::string source) {
+  sessions_[current_session_].name = std::move(name);
+  sessions_[current_session_].source = std::move(source);
+}
+
+void Map::RestoreSessions(std::vector<MapSession> sessions) {
+  Require(!sessions.empty(), "a map has at least one session");
+  for (size_t i = 0; i < sessions.size(); ++i)
+    Require(sessions[i].id == i, "session ids must be 0, 1, 2, ... in order");
+  sessions_ = std::move(sessions);
+  current_session_ = static_cast<std::uint32_t>(sessions_.size() - 1);
+}
+
+std::uint32_t Map::StartNewMap() {
+  active_map_id_ = next_map_id_++;
+  ++big_change_index_;
+  return active_map_id_;
+}
+
+void Map::ActivateMap(std::uint32_t map_id) {
+  Require(map_id < next_map_id_, "ActivateMap: no such map");
+  if (map_id != active_map_id_) ++big_change_index_;
+  active_map_id_ = map_id;
+}
+
+void Map::MergeMapInto(std::uint32_t from, std::uint32_t into) {
+  Require(from != into, "MergeMapInto: a map cannot merge into itself");
+  for (KeyFrame* kf : keyframes_) {
+    if (kf->map_id_ != from) continue;
+    kf->map_id_ = into;
+    kf->map_origin_ = false;
+  }
+  if (active_map_id_ == from) active_map_id_ = into;
+  ++big_change_index_;
+}
+
+void Map::DiscardMap(std::uint32_t map_id) {
+  for (MapPoint* p : MapPointsOfMap(map_id)) {
+    p->MarkBadForReset();
+    EraseMapPoint(p);
+  }
+  for (KeyFrame* kf : KeyFramesOfMap(map_id)) {
+    kf->MarkBadForReset();
+    EraseKeyFrame(kf);
+  }
+  std::erase_if(recent_points, [](const MapPoint* p) { return p->is_bad(); });
+  ++big_change_index_;
+}
+
+void Map::RestoreMapIds(std::uint32_t active, std::uint32_t next) {
+  Require(active < next, "the active map id must be below the next map id");
+  for (const KeyFrame* kf : keyframes_) Require(kf->map_id_ < next, "a keyframe's map id is out of range");
+  active_map_id_ = active;
+  next_map_id_ = next;
+}
+
+std::vector<std::uint32_t> Map::MapIds() const {
+  std::set<std::uint32_t> ids;
+  for (const KeyFrame* kf : keyframes_) ids.insert(kf->map_id());
+  return {ids.begin(), ids.end()};
+}
+
+std::vector<KeyFrame*> Map::KeyFramesOfMap(std::uint32_t map_id) const {
+  std::vector<KeyFrame*> out;
+  for (KeyFrame* kf : keyframes_) {
+    if (kf->map_id() == map_id) out.push_back(kf);
+  }
+  return out;
+}
+
+std::vector<MapPoint*> Map::MapPointsOfMap(std::uint32_t map_id) const {
+  std::vector<MapPoint*> out;
+  for (MapPoint* p : points_) {
+    if (p->map_id() == map_id) out.push_back(p);
+  }
+  return out;
+}
+
+size_t Map::NumKeyFramesOfMap(std::uint32_t map_id) const {
+  return static_cast<size_t>(std::count_if(keyframes_.begin(), keyframes_.end(),
+                                           [map_id](const KeyFrame* kf) { return kf->map_id() == map_id; }));
 }
 
 std::vector<KeyFrame*> Map::KeyFrames() const { return {keyframes_.begin(), keyframes_.end()}; }

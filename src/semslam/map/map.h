@@ -6,12 +6,20 @@
 // release the lock, and write results back under the exclusive lock, checking is_bad() on the way.
 // Erased keyframes and points stay allocated until the map is destroyed, so pointers held across locks
 // never dangle; they only turn bad.
+//
+// Several maps in one (an atlas, after ORB-SLAM3, Campos et al. 2021): when tracking is lost for good, a new
+// map starts, with a frame of reference of its own, and the old ones are kept; when a place of an older map
+// is recognized, the two are merged into one. Every keyframe carries the id of its map (points follow their
+// reference keyframe); the active map is the one tracking and mapping extend. Every keyframe also carries
+// its session: the drive (run) that made it, so that a map reused by later runs knows whose frames are
+// whose.
 
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <set>
 #include <shared_mutex>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -21,6 +29,13 @@
 #include "semslam/map/map_point.h"
 
 namespace semslam {
+
+// A drive that added keyframes to the map (one run of semslam).
+struct MapSession {
+  std::uint32_t id = 0;
+  std::string name;    // the sequence's name
+  std::string source;  // where its frames came from (the sequence path)
+};
 
 class Map {
  public:
@@ -32,6 +47,7 @@ class Map {
   std::unique_lock<std::shared_mutex> WriteLock() const { return std::unique_lock(mutex_); }
 
   // With the write lock held.
+  // A keyframe of the active map and the current session; the first keyframe of a map is its origin.
   KeyFrame* AddKeyFrame(const Frame& frame);
   MapPoint* AddMapPoint(const Eigen::Vector3d& position, KeyFrame* reference_keyframe);
   // Removes from the active sets (the caller has marked the object bad).
@@ -43,6 +59,32 @@ class Map {
 
   // Empties the active sets (objects stay allocated for pointers still held elsewhere). Write lock.
   void Clear();
+
+  // Sessions. A new Map has session 0 with no name; BeginSession starts another one (a run that reuses a
+  // loaded map) and returns its id. Write lock.
+  std::uint32_t BeginSession(std::string name, std::string source);
+  void NameCurrentSession(std::string name, std::string source);
+  void RestoreSessions(std::vector<MapSession> sessions);  // map loading: the stored table
+  const std::vector<MapSession>& sessions() const { return sessions_; }
+  std::uint32_t current_session() const { return current_session_; }
+
+  // Maps. StartNewMap makes a new, empty map active (the next keyframe is its origin) and returns its id;
+  // ActivateMap makes an existing one active. MergeMapInto moves every keyframe of map `from` (poses and
+  // points already expressed in the frame of `into`) into map `into`, which becomes active if `from` was.
+  // DiscardMap erases a whole map (a young one given up). Write lock.
+  std::uint32_t StartNewMap();
+  void ActivateMap(std::uint32_t map_id);
+  void MergeMapInto(std::uint32_t from, std::uint32_t into);
+  void DiscardMap(std::uint32_t map_id);
+  std::uint32_t active_map_id() const { return active_map_id_; }
+  std::uint32_t next_map_id() const { return next_map_id_; }
+  void RestoreMapIds(std::uint32_t active, std::uint32_t next);  // map loading
+
+  // With a read lock held: the maps that hold keyframes (ascending ids), and their contents.
+  std::vector<std::uint32_t> MapIds() const;
+  std::vector<KeyFrame*> KeyFramesOfMap(std::uint32_t map_id) const;  // by id
+  std::vector<MapPoint*> MapPointsOfMap(std::uint32_t map_id) const;  // by id
+  size_t NumKeyFramesOfMap(std::uint32_t map_id) const;
 
   // With a read lock held.
   std::vector<KeyFrame*> KeyFrames() const;        // active, by id
@@ -71,6 +113,10 @@ class Map {
   std::uint64_t next_keyframe_id_ = 0;
   std::uint64_t next_point_id_ = 0;
   int big_change_index_ = 0;
+  std::vector<MapSession> sessions_ = {MapSession{}};
+  std::uint32_t current_session_ = 0;
+  std::uint32_t active_map_id_ = 0;
+  std::uint32_t next_map_id_ = 1;
 };
 
 }  // namespace semslam

@@ -12,7 +12,8 @@ namespace semslam {
 class MapSerializer {
  public:
   static void WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf);
-  static std::unique_ptr<KeyFrame> ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
+  static std::unique_ptr<KeyFrame> ReadKeyFrame(BinaryReader& r, std::uint32_t version,
+                                                std::uint64_t* parent_id,
                                                 std::vector<std::uint64_t>* loop_ids);
   static void WritePoint(BinaryWriter& w, const MapPoint& p);
   static void ReadPoint(BinaryReader& r, Map& map,
@@ -22,6 +23,7 @@ class MapSerializer {
     kf->first_connection_ = false;
   }
   static void AddLoopEdge(KeyFrame* kf, KeyFrame* other) { kf->AddLoopEdge(other); }
+  static void SetOrigin(KeyFrame* kf) { kf->map_origin_ = true; }
 };
 
 namespace {
@@ -127,9 +129,13 @@ void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
   w.Put(kf.gps_sigma_m);
   w.PutVector(kf.keypoint_labels.quantized());
   w.PutVector(kf.keypoint_labels.labeled());
+  w.Put<std::uint32_t>(kf.session());
+  w.Put<std::uint32_t>(kf.map_id());
+  w.Put<std::uint8_t>(kf.is_map_origin());
 }
 
-std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint64_t* parent_id,
+std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint32_t version,
+                                                      std::uint64_t* parent_id,
                                                       std::vector<std::uint64_t>* loop_ids) {
   const auto id = r.Get<std::uint64_t>();
   r.set_context(fmt::format("keyframe {}", id));
@@ -172,6 +178,15 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   if (!labeled.empty() && (labeled.size() != n || quantized_labels.size() != n * kNumClasses)) {
     r.Fail("keypoint labels of the wrong size");
   }
+  std::uint32_t session = 0, map_id = 0;
+  bool origin = false;
+  if (version >= 2) {
+    session = r.Get<std::uint32_t>();
+    map_id = r.Get<std::uint32_t>();
+    const auto origin_byte = r.Get<std::uint8_t>();
+    if (origin_byte > 1) r.Fail("invalid map origin flag");
+    origin = origin_byte == 1;
+  }
 
   Frame frame(frame_id, timestamp,
               MakeFrameData(camera, stereo, std::move(features), std::move(right_u), std::move(depth)));
@@ -180,6 +195,9 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   if (has_gps) kf->gps_enu = gps;
   kf->gps_sigma_m = gps_sigma;
   kf->keypoint_labels.Restore(std::move(quantized_labels), std::move(labeled));
+  kf->session_ = session;
+  kf->map_id_ = map_id;
+  kf->map_origin_ = origin;
   return kf;
 }
 
@@ -237,6 +255,13 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
 
 void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFileContents& extra) {
   BinaryWriter w;
+  w.Put<std::uint32_t>(static_cast<std::uint32_t>(map.sessions().size()));
+  for (const MapSession& session : map.sessions()) {
+    w.PutString(session.name);
+    w.PutString(session.source);
+  }
+  w.Put<std::uint32_t>(map.active_map_id());
+  w.Put<std::uint32_t>(map.next_map_id());
   const auto keyframes = map.KeyFrames();
   const auto points = map.MapPoints();
   w.Put<std::uint64_t>(keyframes.size());
@@ -257,19 +282,39 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
 
 MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
   const ChecksummedFile file = ReadChecksummedFile(path, kMagic);
-  if (file.version != kMapFileVersion) {
-    throw InputError(path, fmt::format("map file version {} is not supported (this build reads {})",
+  if (file.version < 1 || file.version > kMapFileVersion) {
+    throw InputError(path, fmt::format("map file version {} is not supported (this build reads 1 to {})",
                                        file.version, kMapFileVersion));
   }
   Require(map.NumKeyFrames() == 0, "ReadMapFile needs an empty map");
   BinaryReader r(file.payload, path);
+  std::vector<MapSession> sessions = {MapSession{}};
+  std::uint32_t active_map = 0, next_map = 1;
+  if (file.version >= 2) {
+    r.set_context("sessions");
+    const auto num_sessions = r.Get<std::uint32_t>();
+    if (num_sessions == 0 || num_sessions > 1'000'000) r.Fail("invalid session count");
+    sessions.clear();
+    for (std::uint32_t i = 0; i < num_sessions; ++i) {
+      MapSession session;
+      session.id = i;
+      session.name = r.GetString();
+      session.source = r.GetString();
+      sessions.push_back(std::move(session));
+    }
+    active_map = r.Get<std::uint32_t>();
+    next_map = r.Get<std::uint32_t>();
+    if (active_map >= next_map) r.Fail("the active map id is not below the next map id");
+  }
   const auto num_keyframes = r.Get<std::uint64_t>();
   std::unordered_map<std::uint64_t, KeyFrame*> by_id;
   std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;
   for (std::uint64_t i = 0; i < num_keyframes; ++i) {
     std::uint64_t parent = kNone;
     std::vector<std::uint64_t> loops;
-    auto kf = MapSerializer::ReadKeyFrame(r, &parent, &loops);
+    auto kf = MapSerializer::ReadKeyFrame(r, file.version, &parent, &loops);
+    if (kf->session() >= sessions.size()) r.Fail(fmt::format("session {} does not exist", kf->session()));
+    if (kf->map_id() >= next_map) r.Fail(fmt::format("map id {} is out of range", kf->map_id()));
     if (by_id.count(kf->id())) r.Fail(fmt::format("duplicate keyframe id {}", kf->id()));
     KeyFrame* k = map.RestoreKeyFrame(std::move(kf));
     by_id[k->id()] = k;
@@ -286,8 +331,11 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
   }
   if (!r.AtEnd()) r.Fail("trailing bytes");
 
+  map.RestoreSessions(std::move(sessions));
+  map.RestoreMapIds(active_map, next_map);
   // Derived state: covisibility, spanning tree, loop edges, point normals and descriptors.
   const auto keyframes = map.KeyFrames();
+  if (file.version == 1 && !keyframes.empty()) MapSerializer::SetOrigin(keyframes.front());
   for (size_t i = 0; i < keyframes.size(); ++i) {
     KeyFrame* kf = keyframes[i];
     kf->UpdateConnections();

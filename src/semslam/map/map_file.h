@@ -1,8 +1,9 @@
 #pragma once
 // The reusable map file (`map.semslam`): a versioned binary file with a checksum, written atomically.
-// It holds the camera, every keyframe (pose, features, stereo, spanning tree, loop edges, GPS link,
-// per-keypoint labels) and every map point (position, observations, label distribution), plus named
-// extra sections that other parts store opaquely (GPS alignment, landmarks, topology, ...).
+// It holds the sessions (drives) that made the map, every keyframe (session, map of the atlas, pose,
+// features, stereo, spanning tree, loop edges, GPS link, per-keypoint labels) and every map point (position,
+// observations, label distribution), plus named extra sections that other parts store opaquely (GPS
+// alignment, landmarks, topology, ...). Version 1 files (one session, one map) are read too.
 // Bag-of-words vectors are not stored: they are recomputed with the vocabulary on load.
 
 #include <filesystem>
@@ -26,6 +27,6 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
 // references.
 MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map);
 
-inline constexpr std::uint32_t kMapFileVersion = 1;
+inline constexpr std::uint32_t kMapFileVersion = 2;
 
 }  // namespace semslam

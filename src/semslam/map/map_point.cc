@@ -13,6 +13,10 @@ MapPoint::MapPoint(std::uint64_t id, const Eigen::Vector3d& position, KeyFrame* 
       position_(position),
       reference_keyframe_(reference_keyframe) {}
 
+std::uint32_t MapPoint::map_id() const {
+  return reference_keyframe_ != nullptr ? reference_keyframe_->map_id() : 0;
+}
+
 void MapPoint::AddObservation(KeyFrame* keyframe, int keypoint_index, bool fuse_labels) {
   if (observations_.count(keyframe)) return;
   observations_[keyframe] = keypoint_index;

@@ -32,6 +32,8 @@ class MapPoint {
   const Eigen::Vector3d& normal() const { return normal_; }
   const Descriptor& descriptor() const { return descriptor_; }
   KeyFrame* reference_keyframe() const { return reference_keyframe_; }
+  // The map the point belongs to: its reference keyframe's.
+  std::uint32_t map_id() const;
 
   // Observations: keyframe -> keypoint index in that keyframe.
   const std::map<KeyFrame*, int, ById>& observations() const { return observations_; }

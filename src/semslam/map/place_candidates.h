@@ -6,6 +6,7 @@
 // group whose accumulated score is at least 75 % of the best group's is a candidate, best group first.
 
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -17,7 +18,8 @@ namespace semslam {
 
 struct PlaceCandidateOptions {
   double min_score = 0.0;
-  std::set<std::uint64_t> excluded;  // keyframe ids never returned (the query and its neighbours)
+  std::set<std::uint64_t> excluded;     // keyframe ids never returned (the query and its neighbours)
+  std::optional<std::uint32_t> map_id;  // only keyframes of this map (see map.h); none: of any map
 };
 
 // Read lock on the map held by the caller.

@@ -25,7 +25,8 @@ void LocalMapperOptions::Check() const {
   Require(redundant_keyframe_ratio > 0 && redundant_keyframe_ratio <= 1,
           "local mapper: redundant_keyframe_ratio must be in (0, 1]");
   Require(local_ba_iterations > 0, "local mapper: local_ba_iterations must be positive");
-  Require(min_parallax_deg >= 0 && min_parallax_deg < 90, "local mapper: min_parallax_deg must be in [0, 90)");
+  Require(min_parallax_deg >= 0 && min_parallax_deg < 90,
+          "local mapper: min_parallax_deg must be in [0, 90)");
 }
 
 LocalMapper::LocalMapper(const LocalMapperOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -79,6 +80,11 @@ bool LocalMapper::HasNewKeyFrames() const { return KeyframesInQueue() > 0; }
 void LocalMapper::WaitUntilIdle() {
   std::unique_lock lock(queue_mutex_);
   queue_cv_.wait(lock, [this] { return (queue_.empty() && !busy_) || !thread_.joinable(); });
+}
+
+void LocalMapper::WaitForQueueAtMost(size_t n) {
+  std::unique_lock lock(queue_mutex_);
+  queue_cv_.wait(lock, [this, n] { return queue_.size() <= n || !thread_.joinable() || finished_.load(); });
 }
 
 void LocalMapper::RequestStop() {
@@ -177,6 +183,7 @@ void LocalMapper::ProcessNewKeyFrame() {
     current_ = queue_.front();
     queue_.pop_front();
   }
+  queue_cv_.notify_all();
   // The bag of words needs only the keyframe's own (immutable) descriptors: no lock.
   if (!current_->has_bow) {
     vocabulary_.Transform(current_->features().descriptors, &current_->bow, &current_->feature_vector);
@@ -452,7 +459,7 @@ void LocalMapper::CullKeyFrames() {
   // A copy: erasing a keyframe changes the current keyframe's covisibility list.
   const std::vector<KeyFrame*> covisibles = current_->Covisibles();
   for (KeyFrame* kf : covisibles) {
-    if (kf->id() == 0 || kf->is_bad()) continue;
+    if (kf->is_map_origin() || kf->is_bad()) continue;
     const FrameData& d = kf->data();
     int total = 0, redundant = 0;
     for (size_t i = 0; i < kf->num_features(); ++i) {

@@ -54,6 +54,8 @@ class LocalMapper {
   void InterruptBA() { abort_ba_.store(true); }
   // Blocks until every queued keyframe is processed and the thread is idle.
   void WaitUntilIdle();
+  // Blocks until at most `n` keyframes wait in the queue (the mapper is working through them).
+  void WaitForQueueAtMost(size_t n);
 
   // Pause protocol for the loop closer: RequestStop(), wait for IsStopped(), work, Release().
   void RequestStop();

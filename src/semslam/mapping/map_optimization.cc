@@ -15,7 +15,7 @@ void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
   auto add_pose = [&](KeyFrame* kf, bool fixed) {
     pose_index[kf] = static_cast<int>(problem->camera_from_world.size());
     problem->camera_from_world.push_back(kf->camera_from_world());
-    problem->pose_fixed.push_back(fixed || kf->id() == 0);
+    problem->pose_fixed.push_back(fixed || kf->is_map_origin());
   };
   for (KeyFrame* kf : keyframes) add_pose(kf, false);
   for (KeyFrame* kf : fixed_keyframes) add_pose(kf, true);
@@ -69,10 +69,10 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
   }
 }
 
-void GlobalBundleAdjustment(Map& map, int iterations, std::atomic<bool>* abort) {
-  const std::vector<KeyFrame*> keyframes = map.KeyFrames();
+void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort) {
+  const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
   std::vector<MapPoint*> points;
-  for (MapPoint* p : map.MapPoints()) {
+  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
     if (!p->is_bad()) points.push_back(p);
   }
   BundleAdjustmentProblem problem;

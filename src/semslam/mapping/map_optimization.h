@@ -18,8 +18,8 @@ struct ObservationRef {
   MapPoint* point = nullptr;
 };
 
-// Adds poses for `keyframes` (free) and `fixed_keyframes` (fixed; keyframe 0 is always fixed), the `points`,
-// and every observation of those points by those keyframes. Read lock.
+// Adds poses for `keyframes` (free) and `fixed_keyframes` (fixed; a map's origin is always fixed), the
+// `points`, and every observation of those points by those keyframes. Read lock.
 void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
                                   const std::vector<KeyFrame*>& fixed_keyframes,
                                   const std::vector<MapPoint*>& points, BundleAdjustmentProblem* problem,
@@ -31,8 +31,8 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
                            const std::vector<MapPoint*>& points, const std::vector<ObservationRef>& refs,
                            bool drop_outliers);
 
-// Optimizes every keyframe and point of the map in place. Write lock held by the caller.
-void GlobalBundleAdjustment(Map& map, int iterations, std::atomic<bool>* abort);
+// Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
+void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
 // cleared from `matches12`. Returns the inlier count. Read lock.

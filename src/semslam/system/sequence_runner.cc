@@ -20,6 +20,7 @@
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/system/atlas_outputs.h"
 #include "semslam/system/semantic_evaluation.h"
 
 namespace semslam {
@@ -101,6 +102,30 @@ nlohmann::json AccuracyJson(const ClassAccuracyCounts& counts) {
   return {{"accuracy", counts.Accuracy()}, {"evaluated", counts.total_evaluated}, {"per_class", per_class}};
 }
 
+// The first frame of the run that has a tracked pose (-1: none).
+long long FirstTrackedFrame(const SlamSystem& slam) {
+  for (const FramePose& pose : slam.AllFramePoses()) {
+    if (!pose.predicted) return static_cast<long long>(pose.frame_index);
+  }
+  return -1;
+}
+
+// A map that never started, or started late, says so.
+void WarnAboutInitialization(const SlamSystem& slam, size_t first, size_t end) {
+  const long long first_tracked = FirstTrackedFrame(slam);
+  if (first_tracked < 0) {
+    spdlog::warn(
+        "no map was started: none of the {} frames was tracked (too little texture or parallax, or "
+        "too few frames?)",
+        end - first);
+    return;
+  }
+  const auto delay = static_cast<size_t>(first_tracked) - first;
+  if (delay > 20) {
+    spdlog::warn("the map started late: its first frame is {}, {} frames into the run", first_tracked, delay);
+  }
+}
+
 }  // namespace
 
 RunSummary RunSequence(const RunOptions& options) {
@@ -128,6 +153,7 @@ RunSummary RunSequence(const RunOptions& options) {
 
   SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
   if (!options.map_in.empty()) slam.LoadMap(options.map_in);
+  slam.NameSession(sequence->name(), sequence->directory().string());
   SegmenterContext segmenter_context;
   segmenter_context.truth_label_dir = sequence->LabelDirectory();
   segmenter_context.seed = options.seed;
@@ -158,8 +184,10 @@ RunSummary RunSequence(const RunOptions& options) {
   progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,
                               stats.frames, stats.keyframes, stats.map_points, stats.loops));
 
+  WarnAboutInitialization(slam, first, end);
   const Trajectory trajectory = slam.FrameTrajectory();
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
+  WriteFramesCsv(options.output / "frames.csv", slam);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
   WriteKittiPoses(options.output / "trajectory.kitti", trajectory);
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
@@ -195,6 +223,9 @@ RunSummary RunSequence(const RunOptions& options) {
       {"frames", stats.frames},
       {"first_frame", first},
       {"tracked", stats.tracked},
+      {"with_pose", stats.with_pose},
+      {"predicted", stats.predicted},
+      {"first_tracked_frame", FirstTrackedFrame(slam)},
       {"keyframes", stats.keyframes},
       {"points", stats.map_points},
       {"keyframes_created", stats.keyframes_created},
@@ -215,6 +246,7 @@ RunSummary RunSequence(const RunOptions& options) {
                      {"correction_m", e.correction_m}});
   }
   run["loop_events"] = loops;
+  run["maps"] = AtlasJson(slam);
   run["classes"] = ClassCountsJson(CountLabels(semantic_points));
   nlohmann::json segmentation = {{"segmenter", segmenter_description},
                                  {"segmented_keyframes", stats.segmented_keyframes},

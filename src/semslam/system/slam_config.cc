@@ -55,11 +55,17 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_frames_between_keyframes", Bind(&o->tracker.min_frames_between_keyframes)},
       {"keyframe_tracked_ratio_mono", Bind(&o->tracker.keyframe_tracked_ratio_mono)},
       {"keyframe_tracked_ratio_stereo", Bind(&o->tracker.keyframe_tracked_ratio_stereo)},
+      {"keyframe_collapse_ratio_mono", Bind(&o->tracker.keyframe_collapse_ratio_mono)},
+      {"keyframe_collapse_ratio_stereo", Bind(&o->tracker.keyframe_collapse_ratio_stereo)},
       {"close_depth_baselines", Bind(&o->tracker.close_depth_baselines)},
       {"init_min_matches", Bind(&o->tracker.init_min_matches)},
+      {"init_match_max_level", Bind(&o->tracker.init_match_max_level)},
+      {"init_match_level_difference", Bind(&o->tracker.init_match_level_difference)},
       {"init_min_parallax_deg", Bind(&o->tracker.init_min_parallax_deg)},
       {"init_parallax_rank", Bind(&o->tracker.init_parallax_rank)},
       {"init_min_points", Bind(&o->tracker.init_min_points)},
+      {"relocalization_timeout_s", Bind(&o->tracker.relocalization_timeout_s)},
+      {"min_keyframes_to_keep_map", Bind(&o->tracker.min_keyframes_to_keep_map)},
       {"pacing", BindPacing(&o->pacing)},
   };
   s["mapping"] = {
@@ -69,6 +75,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"local_ba_iterations", Bind(&o->mapper.local_ba_iterations)},
       {"min_parallax_deg", Bind(&o->mapper.min_parallax_deg)},
       {"final_global_ba", Bind(&o->final_global_ba)},
+      {"max_queued_keyframes", Bind(&o->max_queued_keyframes)},
       {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
   };
   s["loop"] = {
@@ -78,8 +85,9 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_bow_matches", Bind(&o->loop.min_bow_matches)},
       {"min_sim3_inliers", Bind(&o->loop.min_sim3_inliers)},
       {"min_projected_matches", Bind(&o->loop.min_projected_matches)},
-      {"max_correction_ratio", Bind(&o->loop.max_correction_ratio)},
-      {"max_correction_deg", Bind(&o->loop.max_correction_deg)},
+      {"min_verified_neighbours", Bind(&o->loop.min_verified_neighbours)},
+      {"verification_matches", Bind(&o->loop.verification_matches)},
+      {"merge_maps", Bind(&o->loop.merge_maps)},
       {"global_ba", Bind(&o->loop.global_ba)},
       {"global_ba_iterations", Bind(&o->loop.global_ba_iterations)},
   };

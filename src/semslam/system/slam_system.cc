@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <map>
 #include <thread>
 
 #include "semslam/core/error.h"
@@ -39,6 +40,7 @@ std::string_view PacingName(Pacing pacing) {
 }
 
 void SlamOptions::Check() const {
+  Require(max_queued_keyframes >= 0, "max_queued_keyframes must be >= 0");
   tracker.Check();
   mapper.Check();
   loop.Check();
@@ -143,10 +145,17 @@ MapFileContents SlamSystem::LoadMap(const std::filesystem::path& path) {
     kf->has_bow = true;
     database_->Add(kf->id(), kf->bow);
   }
-  spdlog::info("map {} loaded: {} keyframes, {} points", path.string(), map_->NumKeyFrames(),
-               map_->NumMapPoints());
+  map_->BeginSession("", "");
+  spdlog::info("map {} loaded: {} keyframes, {} points, {} maps, {} sessions", path.string(),
+               map_->NumKeyFrames(), map_->NumMapPoints(), map_->MapIds().size(),
+               map_->sessions().size() - 1);
   tracker_->SetMapLoaded();
   return contents;
+}
+
+void SlamSystem::NameSession(const std::string& name, const std::string& source) {
+  auto lock = map_->WriteLock();
+  map_->NameCurrentSession(name, source);
 }
 
 void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContents& extra) const {
@@ -171,9 +180,12 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   ++frames_;
   if (segmentation_) SubmitForSegmentation(frame_id, left, result);
   if (result.state == TrackingState::kOk) ++tracked_;
-  if (result.reset_requested) ResetMap();
+  if (result.reset_requested) DiscardActiveMap();
   if (options_.pacing == Pacing::kSynchronous && (result.new_keyframe || result.initialized_now)) {
     mapper_->WaitUntilIdle();
+  } else if (options_.max_queued_keyframes > 0 && result.new_keyframe && !options_.localization_only) {
+    ScopedTimer timer(timing_, "waiting_for_mapping");
+    mapper_->WaitForQueueAtMost(static_cast<size_t>(options_.max_queued_keyframes));
   }
   return result;
 }
@@ -210,7 +222,7 @@ void SlamSystem::SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& le
   segmentation_->Submit(request, left, static_cast<std::int64_t>(frame_id));
 }
 
-void SlamSystem::ResetMap() {
+void SlamSystem::DiscardActiveMap() {
   ++resets_;
   mapper_->RequestStop();
   while (!mapper_->IsStopped() && !mapper_->IsFinished())
@@ -220,12 +232,11 @@ void SlamSystem::ResetMap() {
     auto lock = map_->WriteLock();
     mapper_->Reset();
     loop_closer_->Reset();
-    database_->Clear();
-    map_->Clear();
+    const std::uint32_t discarded = map_->active_map_id();
+    for (const KeyFrame* kf : map_->KeyFramesOfMap(discarded)) database_->Erase(kf->id());
+    map_->DiscardMap(discarded);
+    map_->StartNewMap();
   }
-  const auto& records = tracker_->records();
-  old_records_.insert(old_records_.end(), records.begin(), records.end());
-  for (auto& record : old_records_) record.reference = nullptr;  // that map is gone
   tracker_->Reset();
   mapper_->Release();
 }
@@ -247,7 +258,10 @@ void SlamSystem::Finish() {
   if (options_.final_global_ba && !options_.localization_only) {
     ScopedTimer timer(timing_, "final_global_ba");
     auto lock = map_->WriteLock();
-    if (map_->NumKeyFrames() > 2) GlobalBundleAdjustment(*map_, options_.final_global_ba_iterations, nullptr);
+    for (const std::uint32_t map_id : map_->MapIds()) {
+      if (map_->NumKeyFramesOfMap(map_id) > 2)
+        GlobalBundleAdjustment(*map_, map_id, options_.final_global_ba_iterations, nullptr);
+    }
   }
 }
 
@@ -257,25 +271,56 @@ Trajectory SlamSystem::FrameTrajectory() const {
   return trajectory;
 }
 
-std::vector<FramePose> SlamSystem::FramePoses() const {
+std::vector<FramePose> SlamSystem::AllFramePoses() const {
   auto lock = map_->ReadLock();
   std::vector<FramePose> poses;
   for (const FrameRecord& record : tracker_->records()) {
+    const KeyFrame* reference = CurrentReference(record);
     const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(record);
-    if (!camera_from_world) continue;
-    poses.push_back(
-        {static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world->Inverse()});
+    if (reference == nullptr || !camera_from_world) continue;
+    FramePose pose{static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world->Inverse()};
+    pose.map_id = reference->map_id();
+    pose.predicted = record.source == PoseSource::kPredicted;
+    poses.push_back(pose);
   }
   return poses;
 }
 
+std::uint32_t SlamSystem::MainMapId() const {
+  std::map<std::uint32_t, size_t> frames;
+  for (const FramePose& pose : AllFramePoses()) {
+    if (!pose.predicted) ++frames[pose.map_id];
+  }
+  std::uint32_t main = 0;
+  size_t most = 0;
+  for (const auto& [map_id, count] : frames) {
+    if (count > most) {
+      most = count;
+      main = map_id;
+    }
+  }
+  if (most > 0) return main;
+  auto lock = map_->ReadLock();
+  return map_->active_map_id();
+}
+
+std::vector<FramePose> SlamSystem::FramePoses() const {
+  const std::uint32_t main = MainMapId();
+  std::vector<FramePose> poses = AllFramePoses();
+  std::erase_if(poses, [main](const FramePose& p) { return p.predicted || p.map_id != main; });
+  return poses;
+}
+
 std::vector<FramePose> SlamSystem::KeyFramePoses() const {
+  const std::uint32_t main = MainMapId();
   auto lock = map_->ReadLock();
   std::vector<FramePose> poses;
-  for (const KeyFrame* kf : map_->KeyFrames()) {
-    if (kf->is_bad()) continue;
-    poses.push_back({static_cast<size_t>(kf->frame_id()), static_cast<long long>(kf->id()), kf->timestamp(),
-                     kf->world_from_camera()});
+  for (const KeyFrame* kf : map_->KeyFramesOfMap(main)) {
+    if (kf->is_bad() || kf->session() != map_->current_session()) continue;
+    FramePose pose{static_cast<size_t>(kf->frame_id()), static_cast<long long>(kf->id()), kf->timestamp(),
+                   kf->world_from_camera()};
+    pose.map_id = main;
+    poses.push_back(pose);
   }
   std::sort(poses.begin(), poses.end(),
             [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
@@ -305,25 +350,32 @@ std::vector<FusionEdge> SlamSystem::KeyFrameEdges(int min_covisibility_weight) c
 }
 
 Trajectory SlamSystem::KeyFrameTrajectory() const {
-  auto lock = map_->ReadLock();
   Trajectory trajectory;
-  for (const KeyFrame* kf : map_->KeyFrames()) {
-    if (!kf->is_bad()) trajectory.push_back({kf->timestamp(), kf->world_from_camera()});
-  }
+  for (const FramePose& pose : KeyFramePoses())
+    trajectory.push_back({pose.timestamp, pose.world_from_camera});
   return trajectory;
 }
 
 SlamStatistics SlamSystem::Statistics() const {
   SlamStatistics s;
   s.frames = frames_;
+  for (const FramePose& pose : AllFramePoses()) {
+    ++(pose.predicted ? s.predicted : s.with_pose);
+  }
   s.tracked = tracked_;
   s.relocalizations = static_cast<size_t>(tracker_->num_relocalizations());
+  s.maps_started = static_cast<size_t>(tracker_->num_new_maps());
+  s.merges = loop_closer_->merges().size();
   s.loops = loop_closer_->loops().size();
   s.resets = resets_;
   s.segmented_keyframes = segmented_keyframes_.load();
   s.segmented_frames = segmented_frames_.load();
   auto lock = map_->ReadLock();
   s.keyframes = map_->NumKeyFrames();
+  s.maps = map_->MapIds().size();
+  for (const FrameRecord& record : tracker_->records()) {
+    if (record.source == PoseSource::kInterpolated) ++s.interpolated;
+  }
   s.keyframes_created = map_->next_keyframe_id();
   s.points_created = map_->next_point_id();
   for (const MapPoint* p : map_->MapPoints()) s.map_points += p->is_bad() ? 0 : 1;
@@ -331,5 +383,6 @@ SlamStatistics SlamSystem::Statistics() const {
 }
 
 std::vector<LoopEvent> SlamSystem::Loops() const { return loop_closer_->loops(); }
+std::vector<LoopEvent> SlamSystem::Merges() const { return loop_closer_->merges(); }
 
 }  // namespace semslam

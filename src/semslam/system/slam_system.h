@@ -56,6 +56,9 @@ struct SlamOptions {
   bool exclude_dynamic = false;
   // A full bundle adjustment of the whole map when the sequence ends (trajectories follow their keyframes).
   bool final_global_ba = true;
+  // Keyframes waiting for the mapper: with more, tracking waits for it (on a busy machine a mapper that falls
+  // behind leaves tracking without the points it needs at the next turn). 0: never wait.
+  int max_queued_keyframes = 2;
   int final_global_ba_iterations = 20;
 
   void Check() const;
@@ -63,7 +66,14 @@ struct SlamOptions {
 
 struct SlamStatistics {
   size_t frames = 0;
-  size_t tracked = 0;
+  size_t tracked = 0;       // frames tracked (or relocalized) in some map
+  size_t with_pose = 0;     // frames with a pose in some map that is not a prediction
+  size_t interpolated = 0;  // of those: frames between the two a monocular map was initialized from, which
+                            // could not be tracked against it
+  size_t predicted = 0;     // frames while lost: the motion model's pose
+  size_t maps = 0;          // maps holding keyframes at the end
+  size_t maps_started = 0;  // new maps after tracking was lost for good (the first map not counted)
+  size_t merges = 0;        // maps merged into others
   size_t keyframes = 0;
   size_t map_points = 0;
   size_t keyframes_created = 0;  // culled ones included
@@ -82,8 +92,11 @@ class SlamSystem {
   SlamSystem(const SlamSystem&) = delete;
   SlamSystem& operator=(const SlamSystem&) = delete;
 
-  // Loads a map saved by SaveMap before the first frame; tracking then starts by relocalizing.
+  // Loads a map saved by SaveMap before the first frame and begins a new session in it; tracking then starts
+  // by relocalizing (in any of its maps).
   MapFileContents LoadMap(const std::filesystem::path& path);
+  // Names the current session (the sequence this run reads).
+  void NameSession(const std::string& name, const std::string& source);
   void SaveMap(const std::filesystem::path& path, const MapFileContents& extra = {}) const;
 
   // Segments keyframes with `segmenter` on a worker thread of its own (tracking never waits for it; when it
@@ -97,17 +110,25 @@ class SlamSystem {
   // Lets mapping and loop closing (and a running global BA) finish, then stops the threads.
   void Finish();
 
-  // Every tracked frame (world_from_camera), following its reference keyframe's current pose.
+  // The map most of this run's frames were tracked in (after merges), whose frame the trajectories use.
+  std::uint32_t MainMapId() const;
+  // Every frame of this run with a pose in the main map (tracked, or interpolated at initialization;
+  // world_from_camera), following its reference keyframe's current pose.
   Trajectory FrameTrajectory() const;
+  // This session's keyframes of the main map.
   Trajectory KeyFrameTrajectory() const;
   // The same with frame indices (and keyframe ids), in frame order.
   std::vector<FramePose> FramePoses() const;
   std::vector<FramePose> KeyFramePoses() const;
+  // Every frame of this run that has a pose in some map (predicted ones included, and marked), in frame
+  // order, each with its map id.
+  std::vector<FramePose> AllFramePoses() const;
   // Loop edges and strong covisibility links between the keyframes of KeyFramePoses() (indices into it), with
   // their current relative poses: the map's own constraints for GPS fusion.
   std::vector<FusionEdge> KeyFrameEdges(int min_covisibility_weight = 100) const;
   SlamStatistics Statistics() const;
   std::vector<LoopEvent> Loops() const;
+  std::vector<LoopEvent> Merges() const;
 
   Map& map() { return *map_; }
   const Map& map() const { return *map_; }
@@ -117,7 +138,8 @@ class SlamSystem {
   const SlamOptions& options() const { return options_; }
 
  private:
-  void ResetMap();
+  // Lost right after a map started: that map is given up (the others stay) and a new one starts.
+  void DiscardActiveMap();
   void OnSegmentation(SegmentationResult&& result);
   void SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left, const TrackingResult& result);
 
@@ -137,8 +159,6 @@ class SlamSystem {
   double first_timestamp_ = 0.0;
   std::optional<Stopwatch> clock_;
   bool finished_ = false;
-  // Trajectory records of maps that were reset (kept so no frame record is lost).
-  std::vector<FrameRecord> old_records_;
   std::unique_ptr<SegmentationWorker> segmentation_;
   std::atomic<size_t> segmented_keyframes_{0};
   std::atomic<size_t> segmented_frames_{0};

@@ -12,14 +12,12 @@
 
 namespace semslam {
 
-std::vector<KeyFrame*> DetectRelocalizationCandidates(const Frame& frame, const KeyFrameDatabase& database,
-                                                      const Map& map) {
-  return FindPlaceCandidates(frame.bow, database, map);
-}
-
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
-                     const std::function<int(Frame&)>& optimize_pose, bool exclude_dynamic) {
-  const std::vector<KeyFrame*> candidates = DetectRelocalizationCandidates(frame, database, map);
+                     const std::function<int(Frame&)>& optimize_pose, const RelocalizationOptions& options) {
+  PlaceCandidateOptions candidate_options;
+  candidate_options.map_id = options.map_id;
+  const std::vector<KeyFrame*> candidates = FindPlaceCandidates(frame.bow, database, map, candidate_options);
+  const bool exclude_dynamic = options.exclude_dynamic;
   const auto& camera = frame.data().camera;
   for (KeyFrame* kf : candidates) {
     std::vector<MapPoint*> matches;
@@ -34,11 +32,11 @@ bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& 
       bearings.push_back(camera.Unproject(frame.features().keypoints[i].pixel.cast<double>()));
       slots.push_back(i);
     }
-    PnpRansacOptions options;
-    options.max_reprojection_error_px = 2.0 * std::sqrt(5.991);
-    options.focal_length = camera.fx;
-    options.seed = frame.id() ^ kf->id();
-    const auto pnp = SolvePnpRansac(world_points, bearings, options);
+    PnpRansacOptions pnp_options;
+    pnp_options.max_reprojection_error_px = 2.0 * std::sqrt(5.991);
+    pnp_options.focal_length = camera.fx;
+    pnp_options.seed = frame.id() ^ kf->id();
+    const auto pnp = SolvePnpRansac(world_points, bearings, pnp_options);
     if (!pnp || pnp->num_inliers < 10) continue;
 
     frame.SetPose(pnp->camera_from_world);
@@ -81,7 +79,7 @@ bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& 
         }
       }
     }
-    if (good >= 50) {
+    if (good >= 50 && (!options.plausible || options.plausible(frame))) {
       frame.reference_keyframe = kf;
       return true;
     }

@@ -33,9 +33,31 @@ void TrackerOptions::Check() const {
   Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 &&
               keyframe_tracked_ratio_stereo > 0 && keyframe_tracked_ratio_stereo <= 1,
           "tracker: keyframe_tracked_ratio_mono/stereo must be in (0, 1]");
+  Require(keyframe_collapse_ratio_mono >= 0 && keyframe_collapse_ratio_mono <= keyframe_tracked_ratio_mono &&
+              keyframe_collapse_ratio_stereo >= 0 &&
+              keyframe_collapse_ratio_stereo <= keyframe_tracked_ratio_stereo,
+          "tracker: keyframe_collapse_ratio_mono/stereo must be in [0, keyframe_tracked_ratio]");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
   Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
           "tracker: init_min_parallax_deg must be >= 0, init_parallax_rank >= 1, init_min_points >= 8");
+  Require(init_match_max_level >= 0 && init_match_level_difference >= 0,
+          "tracker: init_match_max_level and init_match_level_difference must be >= 0");
+  Require(relocalization_timeout_s >= 0, "tracker: relocalization_timeout_s must be >= 0");
+  Require(min_keyframes_to_keep_map >= 1, "tracker: min_keyframes_to_keep_map must be >= 1");
+}
+
+const char* ToString(PoseSource source) {
+  switch (source) {
+    case PoseSource::kNone:
+      return "none";
+    case PoseSource::kTracked:
+      return "tracked";
+    case PoseSource::kInterpolated:
+      return "interpolated";
+    case PoseSource::kPredicted:
+      return "predicted";
+  }
+  return "?";
 }
 
 const char* ToString(TrackingState state) {
@@ -84,12 +106,16 @@ void Tracker::Reset() {
   state_ = TrackingState::kNotInitialized;
   last_frame_.reset();
   init_frame_.reset();
+  init_between_frames_.clear();
   velocity_.reset();
   last_keyframe_ = nullptr;
   reference_keyframe_ = nullptr;
   local_keyframes_.clear();
   local_points_.clear();
-  for (auto& record : records_) record.reference = nullptr;
+  lost_since_.reset();
+  last_tracked_reference_ = nullptr;
+  last_velocity_.reset();
+  map_loaded_ = false;
 }
 
 std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
@@ -108,18 +134,31 @@ std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, c
                        std::move(stereo.depth));
 }
 
-std::optional<Rigid3d> CurrentCameraFromWorld(const FrameRecord& record) {
-  if (record.reference == nullptr) return std::nullopt;
-  // A culled reference keyframe hands its frames to its parent through the stored relative pose.
-  KeyFrame* kf = record.reference;
+namespace {
+
+// The good keyframe a record hangs from, and the frame's pose relative to it: a culled reference keyframe
+// hands its frames to its parent through the stored relative pose.
+std::pair<const KeyFrame*, Rigid3d> ResolveReference(const FrameRecord& record) {
+  const KeyFrame* kf = record.reference;
+  if (kf == nullptr) return {nullptr, {}};
   Rigid3d camera_from_kf = record.camera_from_reference;
   while (kf->is_bad() && kf->parent() != nullptr) {
     camera_from_kf = camera_from_kf * kf->camera_from_parent();
     kf = kf->parent();
   }
-  if (kf->is_bad()) return std::nullopt;
+  if (kf->is_bad()) return {nullptr, {}};
+  return {kf, camera_from_kf};
+}
+
+}  // namespace
+
+std::optional<Rigid3d> CurrentCameraFromWorld(const FrameRecord& record) {
+  const auto [kf, camera_from_kf] = ResolveReference(record);
+  if (kf == nullptr) return std::nullopt;
   return camera_from_kf * kf->camera_from_world();
 }
+
+const KeyFrame* CurrentReference(const FrameRecord& record) { return ResolveReference(record).first; }
 
 TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                               const cv::Mat& right, const cv::Mat& mask) {
@@ -158,11 +197,21 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     } else {
       ok = Relocalize(frame);
       result.relocalized = ok;
+      if (ok && reference_keyframe_->map_id() != map_.active_map_id()) {
+        // Relocalized in another map of a loaded atlas: tracking and mapping go on in that one.
+        lock.unlock();
+        {
+          auto write = map_.WriteLock();
+          map_.ActivateMap(reference_keyframe_->map_id());
+        }
+        lock.lock();
+      }
     }
     if (ok) ok = TrackLocalMap(frame);
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     if (ok) {
-      velocity_ = last_frame_ && last_frame_->has_pose()
+      lost_since_.reset();
+      velocity_ = last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr
                       ? std::optional<Rigid3d>(frame.camera_from_world() * last_frame_->world_from_camera())
                       : std::nullopt;
       if (NeedNewKeyFrame(frame)) {
@@ -176,14 +225,25 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
       }
     } else {
       velocity_.reset();
+      if (!lost_since_) {
+        lost_since_ = timestamp;
+        spdlog::info("frame {}: tracking lost", frame.id());
+      }
     }
   }
 
-  if (state_ == TrackingState::kLost && !options_.localization_only && !map_loaded_) {
-    auto lock = map_.ReadLock();
-    if (map_.NumKeyFrames() <= 5) {
-      spdlog::warn("frame {}: tracking lost soon after initialization; the map is reset", frame.id());
+  if (state_ == TrackingState::kLost && !options_.localization_only) {
+    size_t active_keyframes = 0;
+    {
+      auto lock = map_.ReadLock();
+      active_keyframes = map_.NumKeyFramesOfMap(map_.active_map_id());
+    }
+    if (!map_loaded_ && active_keyframes < static_cast<size_t>(options_.min_keyframes_to_keep_map)) {
+      spdlog::warn("frame {}: tracking lost soon after initialization; that map ({} keyframes) is given up",
+                   frame.id(), active_keyframes);
       result.reset_requested = true;
+    } else if (timestamp - lost_since_.value_or(timestamp) >= options_.relocalization_timeout_s) {
+      StartNewMap(frame, result);
     }
   }
 
@@ -193,10 +253,18 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   if (state_ == TrackingState::kOk && frame.has_pose()) {
     if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
     record.reference = frame.reference_keyframe;
+    record.source = PoseSource::kTracked;
     auto lock = map_.ReadLock();
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
     result.camera_from_world = frame.camera_from_world();
     result.matched_points = inliers_;
+    last_tracked_reference_ = record.reference;
+    last_tracked_camera_from_reference_ = record.camera_from_reference;
+    last_velocity_ = velocity_;
+    frames_since_tracked_ = 0;
+  } else {
+    ++frames_since_tracked_;
+    PredictPose(frame, record);
   }
   records_.push_back(record);
   result.state = state_;
@@ -248,148 +316,6 @@ void Tracker::ComputeBow(Frame& frame) const {
   if (frame.has_bow) return;
   vocabulary_.Transform(frame.features().descriptors, &frame.bow, &frame.feature_vector);
   frame.has_bow = true;
-}
-
-bool Tracker::InitializeStereo(Frame& frame) {
-  if (frame.num_features() < 500) return false;
-  auto lock = map_.WriteLock();
-  frame.SetPose(Rigid3d());
-  KeyFrame* kf = map_.AddKeyFrame(frame);
-  new_keyframes_.push_back({kf->id(), frame.id()});
-  int created = 0;
-  for (size_t i = 0; i < frame.num_features(); ++i) {
-    const auto world = kf->UnprojectStereo(static_cast<int>(i));
-    if (!world) continue;
-    MapPoint* p = map_.AddMapPoint(*world, kf);
-    p->AddObservation(kf, static_cast<int>(i));
-    kf->SetMapPoint(static_cast<int>(i), p);
-    p->UpdateDescriptor();
-    p->UpdateNormalAndDepth();
-    frame.map_points[i] = p;
-    ++created;
-  }
-  spdlog::info("stereo map initialized with {} points", created);
-  last_keyframe_ = reference_keyframe_ = kf;
-  frame.reference_keyframe = kf;
-  local_keyframes_ = {kf};
-  local_points_ = map_.MapPoints();
-  lock.unlock();
-  if (mapper_) mapper_->InsertKeyFrame(kf);
-  return true;
-}
-
-bool Tracker::InitializeMonocular(Frame& frame) {
-  if (!init_frame_) {
-    if (frame.num_features() > 100) {
-      init_frame_ = std::make_unique<Frame>(frame);
-      init_prior_positions_.clear();
-      for (const auto& kp : frame.features().keypoints) init_prior_positions_.push_back(kp.pixel);
-    }
-    return false;
-  }
-  if (frame.num_features() <= 100) {
-    init_frame_.reset();
-    return false;
-  }
-  std::vector<int> matches12 =
-      MatchForInitialization(init_frame_->features(), frame.features(), init_prior_positions_, 100);
-  const int num_matches =
-      static_cast<int>(std::count_if(matches12.begin(), matches12.end(), [](int m) { return m >= 0; }));
-  if (num_matches < options_.init_min_matches) {
-    init_frame_.reset();
-    return false;
-  }
-  // The next frame searches around where each feature was seen last, so the windows follow the motion.
-  for (size_t i = 0; i < matches12.size(); ++i) {
-    if (matches12[i] >= 0)
-      init_prior_positions_[i] = frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel;
-  }
-
-  std::vector<Eigen::Vector2d> pixels1, pixels2;
-  std::vector<int> index1;
-  for (size_t i = 0; i < matches12.size(); ++i) {
-    if (matches12[i] < 0) continue;
-    pixels1.push_back(init_frame_->features().keypoints[i].pixel.cast<double>());
-    pixels2.push_back(frame.features().keypoints[static_cast<size_t>(matches12[i])].pixel.cast<double>());
-    index1.push_back(static_cast<int>(i));
-  }
-  TwoViewOptions two_view_options;
-  two_view_options.seed = frame.id();
-  two_view_options.min_parallax_deg = options_.init_min_parallax_deg;
-  two_view_options.parallax_rank = options_.init_parallax_rank;
-  two_view_options.min_good_points = options_.init_min_points;
-  const TwoViewResult two_view = InitializeTwoView(pixels1, pixels2, camera_, two_view_options);
-  if (!two_view.success) {
-    spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
-    return false;
-  }
-
-  auto lock = map_.WriteLock();
-  init_frame_->SetPose(Rigid3d());
-  frame.SetPose(two_view.camera2_from_camera1);
-  KeyFrame* kf1 = map_.AddKeyFrame(*init_frame_);
-  KeyFrame* kf2 = map_.AddKeyFrame(frame);
-  new_keyframes_.push_back({kf1->id(), init_frame_->id()});
-  new_keyframes_.push_back({kf2->id(), frame.id()});
-  for (size_t m = 0; m < two_view.points.size(); ++m) {
-    if (!two_view.triangulated[m]) continue;
-    const int i1 = index1[m];
-    const int i2 = matches12[static_cast<size_t>(i1)];
-    MapPoint* p = map_.AddMapPoint(two_view.points[m], kf2);
-    kf1->SetMapPoint(i1, p);
-    kf2->SetMapPoint(i2, p);
-    p->AddObservation(kf1, i1);
-    p->AddObservation(kf2, i2);
-    p->UpdateDescriptor();
-    p->UpdateNormalAndDepth();
-  }
-  kf1->UpdateConnections();
-  kf2->UpdateConnections();
-  spdlog::info("monocular map initialized from frames {} and {} with {} points ({})", init_frame_->id(),
-               frame.id(), map_.NumMapPoints(), two_view.model);
-
-  // Full bundle adjustment of the two views, then the scale: median scene depth 1.
-  GlobalBundleAdjustment(map_, 20, nullptr);
-  const double median_depth = kf1->SceneDepthQuantile(2);
-  if (median_depth <= 0 || kf2->CountTrackedPoints(1) < options_.init_min_points) {
-    spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(),
-                  median_depth, kf2->CountTrackedPoints(1));
-    map_.Clear();
-    init_frame_.reset();
-    return false;
-  }
-  const double inv = 1.0 / median_depth;
-  Rigid3d pose2 = kf2->camera_from_world();
-  pose2.translation *= inv;
-  kf2->SetPose(pose2);
-  for (MapPoint* p : map_.MapPoints()) {
-    p->SetPosition(p->position() * inv);
-    p->UpdateNormalAndDepth();
-  }
-  frame.SetPose(kf2->camera_from_world());
-  frame.map_points = kf2->map_points();
-  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
-  frame.reference_keyframe = kf2;
-  last_keyframe_ = reference_keyframe_ = kf2;
-  local_keyframes_ = {kf1, kf2};
-  local_points_ = map_.MapPoints();
-  // The first frame of the map is recorded too, so the trajectory starts where the map does.
-  if (!records_.empty()) {
-    for (auto& record : records_) {
-      if (record.frame_id == init_frame_->id()) {
-        record.reference = kf1;
-        record.camera_from_reference = Rigid3d();
-      }
-    }
-  }
-  lock.unlock();
-  init_frame_.reset();
-  if (mapper_) {
-    mapper_->InsertKeyFrame(kf1);
-    mapper_->InsertKeyFrame(kf2);
-  }
-  inliers_ = kf2->CountTrackedPoints(1);
-  return true;
 }
 
 int Tracker::OptimizeFramePose(Frame& frame) {
@@ -579,108 +505,6 @@ bool Tracker::TrackLocalMap(Frame& frame) {
     return false;
   }
   return inliers_ >= 30;
-}
-
-bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
-  if (options_.localization_only || mapper_ == nullptr) return false;
-  if (mapper_->IsStopped() || mapper_->StopRequested()) return false;
-  const size_t num_keyframes = map_.NumKeyFrames();
-  const auto max_frames = static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
-  if (frame.id() < last_relocalization_frame_ + max_frames && num_keyframes > max_frames) return false;
-  const int min_observations = num_keyframes <= 2 ? 2 : 3;
-  const int reference_matches = reference_keyframe_->CountTrackedPoints(min_observations);
-  const bool mapper_idle = mapper_->AcceptsKeyFrames();
-
-  int tracked_close = 0, untracked_close = 0;
-  if (!options_.monocular) {
-    const FrameData& data = frame.data();
-    const double close = options_.close_depth_baselines * stereo_->baseline;
-    for (size_t i = 0; i < frame.num_features(); ++i) {
-      if (data.depth[i] > 0 && data.depth[i] < close) {
-        if (frame.map_points[i] != nullptr && !frame.outliers[i]) {
-          ++tracked_close;
-        } else {
-          ++untracked_close;
-        }
-      }
-    }
-  }
-  const bool need_close = tracked_close < 100 && untracked_close > 70;
-  double ratio =
-      options_.monocular ? options_.keyframe_tracked_ratio_mono : options_.keyframe_tracked_ratio_stereo;
-  if (num_keyframes < 2) ratio = 0.4;
-
-  const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;
-  const bool c1a = frame.id() >= last_kf_frame + max_frames;
-  const bool c1b =
-      frame.id() >= last_kf_frame + static_cast<std::uint64_t>(options_.min_frames_between_keyframes) &&
-      mapper_idle;
-  const bool c1c = !options_.monocular && (inliers_ < reference_matches * 0.25 || need_close);
-  const bool c2 = (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
-  if (!((c1a || c1b || c1c) && c2)) return false;
-  if (mapper_idle) return true;
-  mapper_->InterruptBA();
-  return !options_.monocular && mapper_->KeyframesInQueue() < 3;
-}
-
-void Tracker::CreateNewKeyFrame(Frame& frame) {
-  if (!mapper_->SetNotStop(true)) return;
-  auto lock = map_.WriteLock();
-  KeyFrame* kf = map_.AddKeyFrame(frame);
-  new_keyframes_.push_back({kf->id(), frame.id()});
-  reference_keyframe_ = kf;
-  frame.reference_keyframe = kf;
-  if (!options_.monocular) {
-    // Close stereo points the map does not have yet become map points now, so the next frames track them.
-    std::vector<std::pair<float, int>> by_depth;
-    const FrameData& data = frame.data();
-    for (size_t i = 0; i < frame.num_features(); ++i) {
-      if (data.depth[i] > 0) by_depth.emplace_back(data.depth[i], static_cast<int>(i));
-    }
-    std::sort(by_depth.begin(), by_depth.end());
-    const double close = options_.close_depth_baselines * stereo_->baseline;
-    int count = 0;
-    for (const auto& [depth, i] : by_depth) {
-      MapPoint* existing = kf->map_point(i);
-      const bool create = existing == nullptr || existing->is_bad() || existing->num_observations() < 1;
-      if (create) {
-        if (existing != nullptr) kf->SetMapPoint(i, nullptr);
-        const auto world = kf->UnprojectStereo(i);
-        MapPoint* p = map_.AddMapPoint(*world, kf);
-        p->AddObservation(kf, i);
-        kf->SetMapPoint(i, p);
-        p->UpdateDescriptor();
-        p->UpdateNormalAndDepth();
-        frame.map_points[static_cast<size_t>(i)] = p;
-      }
-      ++count;
-      if (depth > close && count > 100) break;
-    }
-  }
-  last_keyframe_ = kf;
-  lock.unlock();
-  mapper_->InsertKeyFrame(kf);
-  mapper_->SetNotStop(false);
-}
-
-bool Tracker::Relocalize(Frame& frame) {
-  ScopedTimer timer(timing_, "relocalization");
-  ComputeBow(frame);
-  const bool ok = RelocalizeFrame(
-      frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); }, options_.exclude_dynamic);
-  if (!ok) return false;
-  last_relocalization_frame_ = frame.id();
-  velocity_.reset();
-  // The reference keyframe is chosen by the local map step that follows.
-  for (size_t i = 0; i < frame.map_points.size(); ++i) {
-    MapPoint* p = frame.map_points[i];
-    if (p != nullptr && !frame.outliers[i] && !p->observations().empty()) {
-      reference_keyframe_ = p->observations().begin()->first;
-      break;
-    }
-  }
-  spdlog::info("frame {}: relocalized", frame.id());
-  return true;
 }
 
 }  // namespace semslam

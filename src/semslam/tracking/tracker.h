@@ -4,6 +4,7 @@
 // relocalization when tracking is lost. The caller (System) drives it frame by frame.
 
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <opencv2/core/mat.hpp>
 #include <optional>
@@ -28,22 +29,35 @@ struct TrackerOptions {
   // Initialization frames share features among levels by area: the fine levels keep the near points whose
   // parallax the two-view test needs (by side length, the 200-frame city initialized at frame 14, not 0).
   double init_level_share_exponent = 2.0;
+  // A new keyframe is due when the frame tracks fewer than keyframe_tracked_ratio of the reference keyframe's
+  // points and min_frames have passed since the last one (max_frames: whatever the ratio), or at once when it
+  // tracks fewer than keyframe_collapse_ratio of them.
   int max_frames_between_keyframes = 10;  // usually the frame rate
-  // A new keyframe is due when the frame tracks fewer than this share of the reference keyframe's points.
+  int min_frames_between_keyframes = 3;
   double keyframe_tracked_ratio_mono = 0.9;
   double keyframe_tracked_ratio_stereo = 0.75;
-  int min_frames_between_keyframes = 0;
+  double keyframe_collapse_ratio_mono = 0.5;
+  double keyframe_collapse_ratio_stereo = 0.25;
   double close_depth_baselines = 40.0;  // stereo: points closer than this many baselines are "close"
   bool localization_only = false;       // track against the map without changing it
   // Keep map points whose fused label is a moving class (person, rider, vehicles) out of tracking and
   // relocalization (they need a segmenter to be known).
   bool exclude_dynamic = false;
   int init_min_matches = 100;
+  // Initialization matches keypoints of levels [0, init_match_max_level], each within
+  // init_match_level_difference levels of the other (forward motion changes the scale).
+  int init_match_max_level = 0;
+  int init_match_level_difference = 0;
   // Monocular initialization accepts a two-view reconstruction when the init_parallax_rank-th most
   // parallax-rich point has at least init_min_parallax_deg (see geometry/two_view.h).
   double init_min_parallax_deg = 2.0;
   int init_parallax_rank = 50;
   int init_min_points = 100;  // well-triangulated points needed
+  // Lost for this long (seconds) without relocalizing in the active map: a new map starts and the old one
+  // is kept, to be merged when its places are seen again. Monocular re-initializes; stereo starts at once.
+  double relocalization_timeout_s = 1.0;
+  // A map lost with at most this many keyframes is given up (discarded) instead of kept.
+  int min_keyframes_to_keep_map = 6;
 
   void Check() const;
 };
@@ -65,24 +79,40 @@ struct TrackingResult {
   bool relocalized = false;
   bool new_keyframe = false;
   std::vector<NewKeyFrame> new_keyframes;  // including those of an initialization
-  bool reset_requested = false;            // lost right after initialization: the System should reset the map
+  // Lost right after initialization: the System should discard the active map (and a new one starts).
+  bool reset_requested = false;
+  bool new_map = false;  // lost for good: a new map was started with this frame
   int matched_points = 0;
   std::optional<Rigid3d> camera_from_world;
   double milliseconds = 0.0;  // time spent tracking this frame (features included)
 };
 
+// How a frame got its pose.
+enum class PoseSource : std::uint8_t {
+  kNone,          // before the first map started
+  kTracked,       // tracked (or relocalized) in a map
+  kInterpolated,  // between the two frames a monocular map was initialized from
+  kPredicted,     // lost: the motion model's prediction from the last tracked frame
+};
+const char* ToString(PoseSource source);
+
 // One entry per processed frame, to rebuild the trajectory after loop closure: the pose relative to a
-// reference keyframe, which keeps following its keyframe when the map is optimized.
+// reference keyframe, which keeps following its keyframe when the map is optimized or merged.
 struct FrameRecord {
   std::uint64_t frame_id = 0;
   double timestamp = 0.0;
-  KeyFrame* reference = nullptr;  // nullptr when the frame was not tracked
+  KeyFrame* reference = nullptr;  // nullptr when the frame has no pose
   Rigid3d camera_from_reference;
+  PoseSource source = PoseSource::kNone;
 };
 
-// The frame's pose in the map as it stands now (through its reference keyframe, or the nearest parent of a
-// culled one); nullopt when the frame was not tracked. Read lock on the map held by the caller.
+// The frame's pose in its map as it stands now (through its reference keyframe, or the nearest parent of a
+// culled one); nullopt when the frame has no pose or its map was discarded. Read lock on the map held by
+// the caller.
 std::optional<Rigid3d> CurrentCameraFromWorld(const FrameRecord& record);
+// The keyframe a record's pose hangs from now (its reference, or the nearest good ancestor of a culled one);
+// nullptr when there is none. Read lock on the map held by the caller.
+const KeyFrame* CurrentReference(const FrameRecord& record);
 
 class Tracker {
  public:
@@ -101,10 +131,12 @@ class Tracker {
   // The frame tracked last (its matches to map points, outliers removed); nullptr before the first.
   const Frame* last_frame() const { return last_frame_.get(); }
   int num_relocalizations() const { return num_relocalizations_; }
-  // Starts from a loaded map: the next frame is relocalized instead of initializing.
+  // Starts from a loaded map: the next frame is relocalized (in any of its maps) instead of initializing.
   void SetMapLoaded();
-  // Forgets the tracking state; the System clears the map and the other threads alongside.
+  // Forgets the tracking state (the frame records stay); the System has discarded the active map and
+  // started a new one.
   void Reset();
+  int num_new_maps() const { return num_new_maps_; }
 
  private:
   std::shared_ptr<const FrameData> ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
@@ -115,6 +147,13 @@ class Tracker {
   bool TrackWithMotionModel(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);
+  // Lost for good: starts a new map (stereo initializes it from `frame` at once).
+  void StartNewMap(Frame& frame, TrackingResult& result);
+  // The record of a frame without a tracked pose: the motion model's prediction, when there is one.
+  void PredictPose(const Frame& frame, FrameRecord& record) const;
+  // Frames between the two a monocular map was initialized from get poses in it: tracked against the second
+  // keyframe from a pose interpolated between the two, or that interpolated pose.
+  void PoseInitializationFrames(KeyFrame* first, KeyFrame* second);
   void UpdateLocalMap(Frame& frame);
   void SearchLocalMapPoints(Frame& frame);
   int OptimizeFramePose(Frame& frame);
@@ -150,11 +189,22 @@ class Tracker {
   std::vector<MapPoint*> local_points_;
   int inliers_ = 0;
   int num_relocalizations_ = 0;
+  int num_new_maps_ = 0;
   bool map_loaded_ = false;
+  // Since when tracking is lost (timestamp of the first lost frame), and the last tracked frame's pose and
+  // motion, from which lost frames are predicted.
+  std::optional<double> lost_since_;
+  KeyFrame* last_tracked_reference_ = nullptr;
+  Rigid3d last_tracked_camera_from_reference_;
+  std::optional<Rigid3d> last_velocity_;
+  int frames_since_tracked_ = 0;
 
-  // Monocular initialization state.
+  // Monocular initialization state: the first frame, where its features were seen last, and the frames
+  // since (posed once the map starts).
   std::unique_ptr<Frame> init_frame_;
   std::vector<Eigen::Vector2f> init_prior_positions_;
+  static constexpr size_t kMaxBetweenFrames = 40;
+  std::deque<Frame> init_between_frames_;
 
   std::vector<FrameRecord> records_;
   std::vector<NewKeyFrame> new_keyframes_;  // of the frame being tracked

@@ -1,0 +1,60 @@
+#include "semslam/system/atlas_outputs.h"
+
+#include <fmt/format.h>
+
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "semslam/core/atomic_file.h"
+
+namespace semslam {
+
+nlohmann::json AtlasJson(const SlamSystem& slam) {
+  const SlamStatistics stats = slam.Statistics();
+  const std::uint32_t main = slam.MainMapId();
+  std::map<std::uint32_t, size_t> frames_per_map;
+  size_t unmerged = 0;
+  for (const FramePose& pose : slam.AllFramePoses()) {
+    if (pose.predicted) continue;
+    ++frames_per_map[pose.map_id];
+    if (pose.map_id != main) ++unmerged;
+  }
+  nlohmann::json per_map = nlohmann::json::object();
+  for (const auto& [map_id, frames] : frames_per_map) per_map[std::to_string(map_id)] = frames;
+  nlohmann::json merges = nlohmann::json::array();
+  for (const LoopEvent& e : slam.Merges()) {
+    merges.push_back({{"query_keyframe", e.query_keyframe},
+                      {"matched_keyframe", e.matched_keyframe},
+                      {"timestamp", e.query_timestamp},
+                      {"merged_map", e.map_id},
+                      {"into_map", e.matched_map_id},
+                      {"matches", e.matches},
+                      {"verified_neighbours", e.verified_neighbours},
+                      {"scale", e.scale}});
+  }
+  nlohmann::json sessions = nlohmann::json::array();
+  {
+    auto lock = slam.map().ReadLock();
+    for (const MapSession& session : slam.map().sessions())
+      sessions.push_back({{"id", session.id}, {"name", session.name}, {"source", session.source}});
+  }
+  return {{"count", stats.maps},    {"started", stats.maps_started}, {"merges", stats.merges},
+          {"main_map", main},       {"frames_per_map", per_map},     {"unmerged_frames", unmerged},
+          {"merge_events", merges}, {"sessions", sessions}};
+}
+
+void WriteFramesCsv(const std::filesystem::path& path, const SlamSystem& slam) {
+  const std::uint32_t main = slam.MainMapId();
+  std::string text = "frame,timestamp,map,source,in_main_map,tx,ty,tz,qx,qy,qz,qw\n";
+  for (const FramePose& pose : slam.AllFramePoses()) {
+    const Rigid3d& t = pose.world_from_camera;
+    text +=
+        fmt::format("{},{:.6f},{},{},{},{:.6f},{:.6f},{:.6f},{:.9f},{:.9f},{:.9f},{:.9f}\n", pose.frame_index,
+                    pose.timestamp, pose.map_id, pose.predicted ? "predicted" : "tracked",
+                    pose.map_id == main ? 1 : 0, t.translation.x(), t.translation.y(), t.translation.z(),
+                    t.rotation.x(), t.rotation.y(), t.rotation.z(), t.rotation.w());
+  }
+  WriteFileAtomically(path, text);
+}
+
+}  // namespace semslam

@@ -1,0 +1,22 @@
+#pragma once
+// What a run reports about the maps of its atlas (see map/map.h): run.json's "maps" section and frames.csv,
+// the map and pose source of every frame.
+
+#include <filesystem>
+#include <nlohmann/json_fwd.hpp>
+
+#include "semslam/system/slam_system.h"
+
+namespace semslam {
+
+// {"count", "started", "merges", "main_map", "frames_per_map": {id: frames}, "unmerged_frames",
+//  "merge_events": [...], "sessions": [...]} after Finish().
+nlohmann::json AtlasJson(const SlamSystem& slam);
+
+// One line per frame of the run with a pose: frame, timestamp, map, source (tracked: tracked, relocalized
+// or posed at a monocular initialization; predicted: the motion model's while lost), in_main_map (0/1: frames
+// of maps never merged into the main one are 0), and the pose in its map (tx ty tz qx qy qz qw,
+// world_from_camera as in TUM files). Written atomically.
+void WriteFramesCsv(const std::filesystem::path& path, const SlamSystem& slam);
+
+}  // namespace semslam

@@ -1,0 +1,102 @@
+// Tracker: when tracking is lost: predicted poses, relocalization in the active map, a new map.
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "semslam/tracking/relocalization.h"
+#include "semslam/tracking/tracker.h"
+
+namespace semslam {
+
+void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
+  std::uint32_t old_map = 0, new_map = 0;
+  {
+    auto lock = map_.WriteLock();
+    old_map = map_.active_map_id();
+    new_map = map_.StartNewMap();
+  }
+  spdlog::warn("frame {}: lost for {:.1f} s without relocalizing; map {} is kept and map {} starts",
+               frame.id(), frame.timestamp() - lost_since_.value_or(frame.timestamp()), old_map, new_map);
+  ++num_new_maps_;
+  result.new_map = true;
+  state_ = TrackingState::kNotInitialized;
+  last_frame_.reset();
+  velocity_.reset();
+  lost_since_.reset();
+  map_loaded_ = false;
+  last_keyframe_ = reference_keyframe_ = nullptr;
+  local_keyframes_.clear();
+  local_points_.clear();
+  if (!options_.monocular && InitializeStereo(frame)) {
+    state_ = TrackingState::kOk;
+    result.initialized_now = true;
+  }
+}
+
+void Tracker::PredictPose(const Frame& frame, FrameRecord& record) const {
+  (void)frame;
+  if (last_tracked_reference_ == nullptr) return;
+  Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
+  if (last_velocity_) {
+    for (int k = 0; k < frames_since_tracked_; ++k)
+      camera_from_reference = *last_velocity_ * camera_from_reference;
+  }
+  record.reference = last_tracked_reference_;
+  record.camera_from_reference = camera_from_reference;
+  record.source = PoseSource::kPredicted;
+}
+
+bool Tracker::Relocalize(Frame& frame) {
+  ScopedTimer timer(timing_, "relocalization");
+  ComputeBow(frame);
+  RelocalizationOptions relocalization;
+  relocalization.exclude_dynamic = options_.exclude_dynamic;
+  // Lost a moment ago, the camera is in the active map, near where the motion model puts it; on a loaded map
+  // it may be anywhere in any map.
+  const KeyFrame* last_reference = nullptr;
+  if (last_tracked_reference_ != nullptr) {
+    FrameRecord last;
+    last.reference = last_tracked_reference_;
+    last.camera_from_reference = last_tracked_camera_from_reference_;
+    last_reference = CurrentReference(last);
+  }
+  if (last_reference != nullptr) {
+    relocalization.map_id = last_reference->map_id();
+    FrameRecord predicted;
+    PredictPose(frame, predicted);
+    const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(predicted);
+    if (camera_from_world) {
+      const Eigen::Vector3d center = camera_from_world->Inverse().translation;
+      const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
+      // Three times the distance the last motion would cover, and never less than half the scene depth.
+      const double radius =
+          std::max(3.0 * step * (frames_since_tracked_ + 1), 0.5 * last_reference->SceneDepthQuantile(2));
+      relocalization.plausible = [center, radius, id = frame.id()](const Frame& f) {
+        const double distance = (f.center() - center).norm();
+        if (distance <= radius) return true;
+        spdlog::info("frame {}: relocalization {:.1f} from where the camera can be (limit {:.1f}) refused",
+                     id, distance, radius);
+        return false;
+      };
+    }
+  }
+  const bool ok = RelocalizeFrame(
+      frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); }, relocalization);
+  if (!ok) return false;
+  last_relocalization_frame_ = frame.id();
+  velocity_.reset();
+  // The reference keyframe is chosen by the local map step that follows.
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    MapPoint* p = frame.map_points[i];
+    if (p != nullptr && !frame.outliers[i] && !p->observations().empty()) {
+      reference_keyframe_ = p->observations().begin()->first;
+      break;
+    }
+  }
+  spdlog::info("frame {}: relocalized in map {}", frame.id(),
+               reference_keyframe_ ? reference_keyframe_->map_id() : map_.active_map_id());
+  return true;
+}
+
+}  // namespace semslam
