@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/system/localizer.h"
 #include "semslam/system/sequence_runner.h"
@@ -22,7 +23,7 @@ struct LocalizeArgs {
   std::string frames;
   std::string config;
   std::string vocabulary;
-  size_t landmarks = 3;
+  size_t landmarks = 3;  // --nearest-landmarks (a count; `run --landmarks` is a file)
   bool quiet = false;
 };
 
@@ -37,7 +38,7 @@ void Run(const LocalizeArgs& args) {
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.max_landmarks = args.landmarks;
-  options.show_progress = !args.quiet;
+  options.show_progress = !args.quiet && !Quiet();
   const LocalizeSummary summary = LocalizeSequence(options);
   std::printf("%zu of %zu frames localized", summary.localized, summary.frames);
   if (summary.within_1m >= 0) std::printf(", %.1f %% within 1 m", 100.0 * summary.within_1m);
@@ -64,9 +65,9 @@ void AddLocalizeCommand(CLI::App& app) {
   cmd->add_option("--frames", args->frames, "Frames A:B (A..B-1)");
   cmd->add_option("--config", args->config, "YAML file of SLAM options")->check(CLI::ExistingFile);
   cmd->add_option("--vocabulary", args->vocabulary, "Bag-of-words vocabulary")->check(CLI::ExistingFile);
-  cmd->add_option("--landmarks", args->landmarks, "Nearest landmarks reported per frame")
+  cmd->add_option("--nearest-landmarks", args->landmarks, "Nearest landmarks reported per frame")
       ->capture_default_str();
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Run(*args); });
 }
 

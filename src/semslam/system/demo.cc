@@ -62,6 +62,7 @@ DemoSummary RunDemo(const DemoOptions& options) {
   run.gps = city / "oxts";
   run.landmarks = city / "landmarks.csv";
   run.show_progress = options.show_progress;
+  run.provenance = options.provenance;
   spdlog::info("demo: SLAM over the city -> {}", run.output.string());
   const RunSummary run_summary = RunSequence(run);
 

@@ -20,7 +20,9 @@
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/system/frame_trajectory.h"
 #include "semslam/system/semantic_evaluation.h"
+#include "semslam/system/slam_config.h"
 
 namespace semslam {
 
@@ -28,6 +30,7 @@ void RunOptions::Check() const {
   Require(!sequence.empty(), "run: --sequence is required");
   Require(!output.empty(), "run: --out is required");
   Require(first_frame < end_frame, "run: the frame range is empty");
+  Require(gps_every >= 1, "run: --gps-every must be at least 1 frame");
   slam.Check();
 }
 
@@ -139,6 +142,7 @@ RunSummary RunSequence(const RunOptions& options) {
   // Per frame: how tracking went and how big the map was (tracking time against map size).
   std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points\n";
   for (size_t i = first; i < end; ++i) {
+    ScopedTimer frame_timer(slam.timing(), "frame");  // the whole system per frame: loading, tracking, pacing
     const cv::Mat left = sequence->LoadImage(i, 0);
     const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
     const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
@@ -161,7 +165,8 @@ RunSummary RunSequence(const RunOptions& options) {
   const Trajectory trajectory = slam.FrameTrajectory();
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
-  WriteKittiPoses(options.output / "trajectory.kitti", trajectory);
+  const DenseTrajectory kitti = WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(),
+                                                          first, first + stats.frames);
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
@@ -174,11 +179,13 @@ RunSummary RunSequence(const RunOptions& options) {
   geo.landmarks = std::move(catalogue);
   geo.landmarks_path = options.landmarks;
   geo.monocular = !stereo;
+  geo.truth = sequence->GroundTruth();
   for (const SemanticPoint& p : semantic_points) {
     if (IsValidTrainId(p.label)) geo.points.push_back({p.position, p.label, p.confidence});
   }
   GeoOptions geo_options;
   geo_options.fuse = options.gps_fusion;
+  geo_options.fusion.sampling.every_n_frames = options.gps_every;
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
@@ -191,6 +198,7 @@ RunSummary RunSequence(const RunOptions& options) {
   summary.seconds = watch.ElapsedSeconds();
   nlohmann::json run = {
       {"sequence", sequence->directory().string()},
+      {"sequence_name", sequence->name()},
       {"mode", stereo ? "stereo" : "mono"},
       {"frames", stats.frames},
       {"first_frame", first},
@@ -205,6 +213,12 @@ RunSummary RunSequence(const RunOptions& options) {
       {"seconds", summary.seconds},
       {"peak_rss_mib", PeakRssMiB()},
   };
+  run["trajectory_kitti"] = {{"frames", kitti.source.size()},
+                             {"own_pose", kitti.Count(PoseSource::kEstimated)},
+                             {"first_pose", kitti.Count(PoseSource::kFirstPose)},
+                             {"motion_model", kitti.Count(PoseSource::kMotionModel)},
+                             {"held", kitti.Count(PoseSource::kHeld)},
+                             {"identity", kitti.Count(PoseSource::kNone)}};
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopEvent& e : slam.Loops()) {
     loops.push_back({{"query_keyframe", e.query_keyframe},
@@ -254,6 +268,9 @@ RunSummary RunSequence(const RunOptions& options) {
     }
   }
   run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
+  run["provenance"] = ProvenanceJson(options.provenance);
+  run["config"] = EffectiveConfigJson(options, slam.options(), end);
+  WriteFileAtomically(options.output / "config.yaml", SlamConfigToYaml(slam.options()));
   WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
   const HtmlReportResult report = WriteHtmlReport(options.output);

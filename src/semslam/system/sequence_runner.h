@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "semslam/system/run_metadata.h"
 #include "semslam/system/slam_system.h"
 
 namespace semslam {
@@ -31,8 +32,10 @@ struct RunOptions {
   std::filesystem::path landmarks;
   bool gps_fusion =
       true;  // pose-graph fusion of the fixes; false: one robust similarity (the paper's method)
+  int gps_every = 30;  // frames between the GPS fixes used (one sample per N frames)
   bool save_map = true;
   bool show_progress = true;
+  RunProvenance provenance;  // the command line and the binary's version, for run.json
 
   void Check() const;
 };
