@@ -18,6 +18,7 @@ packages=(
   libboost-graph-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libosmium2-dev zlib1g-dev libexpat1-dev libbz2-dev
+  python3-dev python3-numpy pybind11-dev
 )
 
 missing=()

@@ -212,10 +212,10 @@ TEST(EvaluateTrajectoryFiles, FormatsTimesAndErrors) {
   for (const auto& p : truth) times.push_back(p.timestamp);
   WriteTimes(dir / "times.txt", times);
 
-  const TrajectoryEvaluation e =
+  const TrajectoryEvaluation evaluation =
       EvaluateTrajectoryFiles(dir / "estimate.txt", dir / "truth.tum", dir / "times.txt");
-  EXPECT_EQ(e.matched, 30u);
-  EXPECT_LT(e.ate.rmse, 1e-6);
+  EXPECT_EQ(evaluation.matched, 30u);
+  EXPECT_LT(evaluation.ate.rmse, 1e-6);
   // A KITTI estimate over part of the frames says which (line i is frame first + i).
   times.push_back(99.0);
   WriteTimes(dir / "longer_times.txt", times);
@@ -264,13 +264,13 @@ TEST(EvaluateTrajectoryFiles, KittiLineCountMustMatchTheFrames) {
   EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "gap.txt", dir / "truth.txt", dir / "times.txt"),
                      "holds 39 poses");
   // The frames of a partial run: lines 0..9 are frames 10..19 of the ground truth.
-  const Trajectory part(truth.begin() + 10, truth.begin() + 20);
-  WriteKittiPoses(dir / "part.txt", part);
+  const Trajectory partial(truth.begin() + 10, truth.begin() + 20);
+  WriteKittiPoses(dir / "part.txt", partial);
   EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", std::nullopt), "holds 10 poses");
-  const TrajectoryEvaluation e =
+  const TrajectoryEvaluation result =
       EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", std::nullopt, {}, FrameRange{10, 20});
-  EXPECT_EQ(e.matched, 10u);
-  EXPECT_LT(e.ate.rmse, 1e-6);
+  EXPECT_EQ(result.matched, 10u);
+  EXPECT_LT(result.ate.rmse, 1e-6);
   const TrajectoryEvaluation timed =
       EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", dir / "times.txt", {}, FrameRange{10, 20});
   EXPECT_EQ(timed.matched, 10u);
