@@ -11,23 +11,32 @@
 #include "semslam/report/html_report.h"
 
 namespace semslam::cli {
+namespace {
+
+struct ReportArgs {
+  std::string run_dir;
+  std::string title;
+  size_t max_points = HtmlReportOptions{}.max_points;
+  bool quiet = false;  // read by main (-q quiets the log)
+};
+
+}  // namespace
 
 void AddReportCommand(CLI::App& app) {
-  auto run_dir = std::make_shared<std::string>();
-  auto title = std::make_shared<std::string>();
-  auto max_points = std::make_shared<size_t>(HtmlReportOptions{}.max_points);
+  auto args = std::make_shared<ReportArgs>();  // outlives parsing: the callback holds it
   auto* cmd = app.add_subcommand("report", "Rebuild report.html from a run folder");
-  cmd->add_option("run_dir", *run_dir, "Folder written by semslam run (with run.json)")
+  cmd->add_option("run_dir", args->run_dir, "Folder written by semslam run (with run.json)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  cmd->add_option("--title", *title, "Page title (default: the sequence and the run folder)");
-  cmd->add_option("--max-points", *max_points, "Map points in the 3D view (a seeded random subset)")
+  cmd->add_option("--title", args->title, "Page title (default: the sequence and the run folder)");
+  cmd->add_option("--max-points", args->max_points, "Map points in the 3D view (a seeded random subset)")
       ->capture_default_str();
-  cmd->callback([=] {
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr");
+  cmd->callback([args] {
     HtmlReportOptions options;
-    options.title = *title;
-    options.max_points = *max_points;
-    const HtmlReportResult report = WriteHtmlReport(*run_dir, options);
+    options.title = args->title;
+    options.max_points = args->max_points;
+    const HtmlReportResult report = WriteHtmlReport(args->run_dir, options);
     spdlog::info("report: {} ({} of {} map points shown, {} bytes)", report.path.string(), report.points_shown,
                  report.map_points, report.bytes);
   });

@@ -17,7 +17,7 @@ import numpy as np
 import semslam
 
 BIN = os.environ.get("SEMSLAM_BIN", "semslam")
-FRAMES = 60
+FRAMES = 150  # the city turns after ~120 frames: GPS along one straight line would not fix the map's heading
 
 
 def run(*args):

@@ -17,17 +17,24 @@ namespace {
 
 constexpr int kFrames = 150;
 
-// `semslam synth --frames 150 --seed 1`, then `semslam run ... --gps --landmarks --segmenter truth-noisy:0.25`.
-Artifact Run150() {
+// `semslam synth --frames 150 --seed 1`.
+Artifact City150() {
   const std::vector<std::string> synth = {"synth", "--frames", std::to_string(kFrames), "--seed", "1", "-q"};
-  const Artifact data = SharedArtifact("city150", synth, [&](const fs::path& dir) -> std::string {
+  Artifact data = SharedArtifact("city150", synth, [&](const fs::path& dir) -> std::string {
     std::vector<std::string> full = synth;
     full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
     const CommandResult r = RunSemslam(full);
     return r.Succeeded() ? "" : r.Describe();
   });
+  if (data.ok()) data.dir /= "dataset";
+  return data;
+}
+
+// Then `semslam run ... --gps --landmarks --segmenter truth-noisy:0.25`.
+Artifact Run150() {
+  const Artifact data = City150();
   if (!data.ok()) return data;
-  const fs::path dataset = data.dir / "dataset";
+  const fs::path dataset = data.dir;
   const std::vector<std::string> run = {"run", "--sequence", SequenceDir(dataset).string(), "--mode", "mono",
                                         "--pacing", "synchronous", "--gps", (dataset / "oxts").string(),
                                         "--landmarks", (dataset / "landmarks.csv").string(), "--segmenter",
@@ -44,7 +51,7 @@ Artifact Run150() {
   return out;
 }
 
-fs::path Dataset150(const fs::path& run) { return run.parent_path().parent_path() / "city150" / "dataset"; }
+fs::path Dataset150() { return City150().dir; }
 
 // evo's readers, re-implemented from their documented conventions (evo itself is not needed): numbers
 // separated by whitespace, '#' lines skipped; TUM "timestamp tx ty tz qx qy qz qw", KITTI 12 numbers per line.
@@ -69,7 +76,7 @@ TEST(Outputs, TrajectoryKittiHasOneLinePerFrameAsEvoReadsIt) {
   const std::vector<std::vector<double>> kitti = EvoRows(run / "trajectory.kitti", 12);
   ASSERT_EQ(kitti.size(), static_cast<size_t>(kFrames));  // the bar: exactly 150 lines
   const std::vector<std::vector<double>> tum = EvoRows(run / "trajectory.tum", 8);
-  const std::vector<double> times = ReadTimes(SequenceDir(Dataset150(run)) / "times.txt");
+  const std::vector<double> times = ReadTimes(SequenceDir(Dataset150()) / "times.txt");
   // Every tracked frame's TUM pose is on the KITTI line of its frame (evo pairs line i with frame i).
   std::vector<double> stamps;
   for (const auto& row : tum) stamps.push_back(row[0]);
@@ -98,7 +105,7 @@ TEST(Outputs, TrajectoryKittiHasOneLinePerFrameAsEvoReadsIt) {
 
 TEST(Outputs, EvalAcceptsTheKittiFileAndRefusesOneWithAFrameMissing) {
   SEMSLAM_ASSERT_ARTIFACT(run, Run150());
-  const fs::path truth = Dataset150(run) / "poses" / "00.txt";
+  const fs::path truth = Dataset150() / "poses" / "00.txt";
   const CommandResult ok = RunSemslam({"eval", "--estimate", (run / "trajectory.kitti").string(), "--truth",
                                        truth.string()});
   ASSERT_TRUE(ok.Succeeded()) << ok.Describe();
@@ -181,7 +188,7 @@ TEST(Outputs, ReportCommandRebuildsTheReport) {
   ASSERT_TRUE(r.Succeeded()) << r.Describe();
   EXPECT_EQ(r.err, "");  // -q: nothing but errors
   const std::string html = ReadText(dir / "report.html");
-  EXPECT_NE(html.find("<title>semslam: city150"), std::string::npos);
+  EXPECT_NE(html.find("<title>semslam: dataset/00, "), std::string::npos) << html.substr(0, 400);
   EXPECT_NE(html.find("id=\"provenance\""), std::string::npos);
   EXPECT_NE(html.find("plots/trajectory.png"), std::string::npos);
   EXPECT_NE(html.find("plots/ate.png"), std::string::npos);

@@ -1,8 +1,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <initializer_list>
 
+#include "semslam/report/class_colors.h"
 #include "semslam/report/html_encoding.h"
 #include "semslam/report/html_report_internal.h"
 #include "semslam/semantics/class_table.h"
@@ -275,15 +277,33 @@ void AppendSummary(Page& page, const ReportInputs& in) {
         single_classes = f.Object(*single, "per_class", "label_evaluation.single_frame_keypoints.per_class");
       }
     }
+    // The classes present (at least 0.5 % of the labeled points, as the plots and the 3D view list them), in
+    // their display colours, commonest first; the rest and the unlabeled points in one "other" row.
     long long total = 0;
-    std::vector<std::pair<int, long long>> counts;  // trainId (kNoLabel: unlabeled), count
+    std::array<long long, kNumClasses> per_class{};
+    long long unlabeled = 0;
     for (int id = 0; id <= kNumClasses; ++id) {
       const std::string key = id < kNumClasses ? std::string(ClassKey(id)) : "unlabeled";
       if (const auto n = f.Integer(*classes, key, "classes." + key); n && *n > 0) {
-        counts.emplace_back(id < kNumClasses ? id : kNoLabel, *n);
+        (id < kNumClasses ? per_class[static_cast<size_t>(id)] : unlabeled) = *n;
         total += *n;
       }
     }
+    const ClassDisplay display = MakeClassDisplay(per_class);
+    std::vector<std::pair<int, long long>> counts;  // trainId (kNoLabel: other classes, unlabeled), count
+    long long other = unlabeled;
+    int other_classes = 0;
+    for (int id = 0; id < kNumClasses; ++id) {
+      const long long n = per_class[static_cast<size_t>(id)];
+      if (display.listed[static_cast<size_t>(id)]) {
+        counts.emplace_back(id, n);
+      } else if (n > 0) {
+        other += n;
+        ++other_classes;
+      }
+    }
+    std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    if (other > 0) counts.emplace_back(kNoLabel, other);
     if (!counts.empty()) {
       page.body +=
           "<table class=\"data sortable\">\n<caption>Map points per class</caption>\n<thead><tr>"
@@ -299,9 +319,12 @@ void AppendSummary(Page& page, const ReportInputs& in) {
         return Cell(FormatPercent(*a), *a);
       };
       for (const auto& [id, n] : counts) {
-        const Rgb color = id == kNoLabel ? Rgb{150, 150, 150} : ClassColor(id);
+        const Rgb color = id == kNoLabel ? display.other : display.color[static_cast<size_t>(id)];
         const std::string key = id == kNoLabel ? "unlabeled" : std::string(ClassKey(id));
-        const std::string name = id == kNoLabel ? "unlabeled" : std::string(ClassName(id));
+        const std::string name =
+            id == kNoLabel ? (other_classes > 0 ? fmt::format("{} other classes, unlabeled", other_classes)
+                                                : std::string("unlabeled"))
+                           : std::string(ClassName(id));
         page.body += fmt::format(
             "<tr><td><span class=\"swatch\" style=\"background:rgb({},{},{})\"></span>{}</td>{}{}{}{}</tr>\n",
             color.r, color.g, color.b, HtmlEscape(name), Cell(GroupThousands(n), static_cast<double>(n)),
@@ -447,10 +470,12 @@ void AppendTimeAnalysis(Page& page, const ReportInputs& in) {
     if (const json* config = f.Object(in.run, "config", "config")) {
       pacing = f.String(*config, "pacing", "config.pacing").value_or("");
     }
+    const std::string waits = pacing == "realtime"      ? ", waiting for the camera's rate (pacing realtime)"
+                              : pacing == "synchronous" ? ", waiting for mapping after each keyframe (pacing synchronous)"
+                              : pacing.empty()          ? ""
+                                                        : " (pacing " + pacing + ")";
     Row row{"Whole system",
-            "per frame: loading, tracking" + std::string(pacing == "realtime" ? ", waiting for the camera's rate" : "") +
-                (pacing.empty() ? "" : " (pacing " + pacing + ")") +
-                "; mean: run seconds / frames, start-up and outputs included",
+            "per frame: loading, tracking" + waits + "; mean: run seconds / frames, start-up and outputs included",
             {},
             {},
             {},

@@ -63,7 +63,7 @@ bool LabelPlacer::Free(const cv::Rect& box) const {
   return std::none_of(taken_.begin(), taken_.end(), [&](const cv::Rect& t) { return (t & box).area() > 0; });
 }
 
-void LabelPlacer::Place(cv::Mat& image, const std::string& text, cv::Point anchor, double scale,
+cv::Rect LabelPlacer::Place(cv::Mat& image, const std::string& text, cv::Point anchor, double scale,
                         const cv::Scalar& color) {
   const cv::Size size = TextSize(text, scale);
   const int w = size.width, h = size.height;
@@ -85,12 +85,13 @@ void LabelPlacer::Place(cv::Mat& image, const std::string& text, cv::Point ancho
       }
       DrawLabel(image, text, anchor + offset + cv::Point(0, h), scale, color);
       taken_.push_back(box);
-      return;
+      return box;
     }
   }
   const cv::Point offset = spots(9)[0];
   DrawLabel(image, text, anchor + offset + cv::Point(0, h), scale, color);
   taken_.emplace_back(anchor + offset, cv::Size(w, h));
+  return taken_.back();
 }
 
 double NiceLength(double limit) {

@@ -33,8 +33,9 @@ class LabelPlacer {
   explicit LabelPlacer(cv::Size image_size) : size_(image_size) {}
   void Reserve(const cv::Rect& area) { taken_.push_back(area); }
   void ReserveAround(cv::Point centre, int radius);
-  void Place(cv::Mat& image, const std::string& text, cv::Point anchor, double scale = 0.5,
-             const cv::Scalar& color = kBlack);
+  // Returns the area the label took.
+  cv::Rect Place(cv::Mat& image, const std::string& text, cv::Point anchor, double scale = 0.5,
+                 const cv::Scalar& color = kBlack);
 
  private:
   bool Free(const cv::Rect& box) const;

@@ -264,19 +264,23 @@
           gl.uniform1f(uRound, settings.pointSize * dpr >= 3 ? 1 : 0);
           ranges.forEach(function (r) { if (visible[r[0]]) gl.drawArrays(gl.POINTS, r[1], r[2]); });
         }
-        gl.uniform1f(uRound, 0);
-        if (settings.trajectory && trajectory.length >= 6) {
-          positions(buffers.trajectory);
-          uniformColor(TRAJECTORY_COLOR);
-          gl.drawArrays(gl.LINE_STRIP, 0, trajectory.length / 3);
-        }
+        // Keyframes under the trajectory, so that many of them do not hide it.
         gl.uniform1f(uRound, 1);
         if (settings.keyframes && keyframes.length > 0) {
           positions(buffers.keyframes);
           uniformColor(KEYFRAME_COLOR);
-          gl.uniform1f(uSize, Math.min(maxSize, (settings.pointSize + 2) * dpr));
+          gl.uniform1f(uSize, Math.min(maxSize, (settings.pointSize + 1) * dpr));
           gl.drawArrays(gl.POINTS, 0, keyframes.length / 3);
         }
+        gl.uniform1f(uRound, 0);
+        if (settings.trajectory && trajectory.length >= 6) {
+          gl.disable(gl.DEPTH_TEST);
+          positions(buffers.trajectory);
+          uniformColor(TRAJECTORY_COLOR);
+          gl.drawArrays(gl.LINE_STRIP, 0, trajectory.length / 3);
+          gl.enable(gl.DEPTH_TEST);
+        }
+        gl.uniform1f(uRound, 1);
         if (settings.landmarks && landmarks.length > 0) {
           positions(buffers.landmarks);
           uniformColor(LANDMARK_COLOR);
@@ -346,6 +350,7 @@
             if (p && p[2] > near) context.fillRect(p[0] - markerSize / 2, p[1] - markerSize / 2, markerSize, markerSize);
           }
         }
+        if (settings.keyframes) markers(keyframes, KEYFRAME_COLOR, (settings.pointSize + 1) * dpr);
         if (settings.trajectory && trajectory.length >= 6) {
           context.strokeStyle = css(TRAJECTORY_COLOR);
           context.lineWidth = dpr;
@@ -359,7 +364,6 @@
           }
           context.stroke();
         }
-        if (settings.keyframes) markers(keyframes, KEYFRAME_COLOR, (settings.pointSize + 2) * dpr);
         if (settings.landmarks) markers(landmarkPositions, LANDMARK_COLOR, 10 * dpr);
       }
     };
@@ -397,11 +401,29 @@
       overlayContext.strokeStyle = settings.light ? 'rgba(255,255,255,0.9)' : 'rgba(0,0,0,0.8)';
       overlayContext.fillStyle = settings.light ? '#000' : '#fff';
       const near = clipRange().near;
+      // Names next to their markers without overlapping each other: the first free of eight spots, else none.
+      const placed = [];
+      const lineHeight = 14 * dpr, gap = 7 * dpr;
+      function free(r) {
+        return placed.every(function (q) {
+          return r.x + r.w <= q.x || q.x + q.w <= r.x || r.y + r.h <= q.y || q.y + q.h <= r.y;
+        });
+      }
       landmarks.forEach(function (l) {
         const p = project(m, l.p, w, h);
         if (!p || p[2] <= near || p[0] < 0 || p[1] < 0 || p[0] > w || p[1] > h) return;
-        overlayContext.strokeText(l.name, p[0] + 8 * dpr, p[1] - 6 * dpr);
-        overlayContext.fillText(l.name, p[0] + 8 * dpr, p[1] - 6 * dpr);
+        const tw = overlayContext.measureText(l.name).width;
+        const spots = [[gap, -gap - lineHeight], [gap, gap], [-gap - tw, -gap - lineHeight], [-gap - tw, gap],
+                       [-tw / 2, -2 * gap - lineHeight], [-tw / 2, 2 * gap], [gap, -lineHeight / 2],
+                       [-gap - tw, -lineHeight / 2]];
+        for (let i = 0; i < spots.length; ++i) {
+          const r = { x: p[0] + spots[i][0], y: p[1] + spots[i][1], w: tw, h: lineHeight };
+          if (!free(r)) continue;
+          placed.push(r);
+          overlayContext.strokeText(l.name, r.x, r.y + lineHeight - 3 * dpr);
+          overlayContext.fillText(l.name, r.x, r.y + lineHeight - 3 * dpr);
+          return;
+        }
       });
     }
     status.textContent = (settings.grid ? gridLabel() + ' \u00b7 ' : '') + shownCount().toLocaleString() + ' of ' + labels.length.toLocaleString() + ' points, ' +
