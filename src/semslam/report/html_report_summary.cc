@@ -280,21 +280,21 @@ void AppendSummary(Page& page, const ReportInputs& in) {
     // The classes present (at least 0.5 % of the labeled points, as the plots and the 3D view list them), in
     // their display colours, commonest first; the rest and the unlabeled points in one "other" row.
     long long total = 0;
-    std::array<long long, kNumClasses> per_class{};
+    std::array<long long, kNumClasses> class_counts{};
     long long unlabeled = 0;
     for (int id = 0; id <= kNumClasses; ++id) {
       const std::string key = id < kNumClasses ? std::string(ClassKey(id)) : "unlabeled";
       if (const auto n = f.Integer(*classes, key, "classes." + key); n && *n > 0) {
-        (id < kNumClasses ? per_class[static_cast<size_t>(id)] : unlabeled) = *n;
+        (id < kNumClasses ? class_counts[static_cast<size_t>(id)] : unlabeled) = *n;
         total += *n;
       }
     }
-    const ClassDisplay display = MakeClassDisplay(per_class);
+    const ClassDisplay display = MakeClassDisplay(class_counts);
     std::vector<std::pair<int, long long>> counts;  // trainId (kNoLabel: other classes, unlabeled), count
     long long other = unlabeled;
     int other_classes = 0;
     for (int id = 0; id < kNumClasses; ++id) {
-      const long long n = per_class[static_cast<size_t>(id)];
+      const long long n = class_counts[static_cast<size_t>(id)];
       if (display.listed[static_cast<size_t>(id)]) {
         counts.emplace_back(id, n);
       } else if (n > 0) {
