@@ -21,8 +21,9 @@ cv::Size TextSize(const std::string& text, double scale, int thickness) {
 
 void DrawTitle(cv::Mat& image, const std::string& title) {
   if (title.empty()) return;
+  // Centred, but clear of the north arrow at the top left.
   const cv::Size size = TextSize(title, 0.7, 2);
-  DrawLabel(image, title, cv::Point((image.cols - size.width) / 2, 28), 0.7);
+  DrawLabel(image, title, cv::Point(std::max(60, (image.cols - size.width) / 2), 28), 0.7);
 }
 
 void DrawCross(cv::Mat& image, cv::Point c, int r, const cv::Scalar& color, int thickness) {
