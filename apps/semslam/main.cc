@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"semslam: visual semantic SLAM with landmarks for large-scale outdoor driving"};
@@ -29,6 +30,8 @@ int main(int argc, char** argv) {
   semslam::cli::AddSegmentCommand(app);
   semslam::cli::AddBenchCommand(app);
 
+  // Ctrl-C / SIGTERM: long commands finish the current frame and save what they did; a second one quits.
+  semslam::InstallInterruptHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -36,6 +39,9 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
     std::fprintf(stderr, "semslam: bad command line: %s (see --help)\n", e.what());
     return 2;
+  } catch (const semslam::Interrupted& e) {
+    std::fprintf(stderr, "semslam: %s\n", e.what());
+    return e.ExitCode();
   } catch (const semslam::InputError& e) {
     std::fprintf(stderr, "semslam: input error: %s\n", e.what());
     return 1;
