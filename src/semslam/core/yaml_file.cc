@@ -54,7 +54,7 @@ YAML::Node LoadYamlText(const std::string& text, const std::filesystem::path& so
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(YamlLocation(source, e.mark), e.msg);
+    throw InputError(YamlLocation(source, e.mark), "malformed YAML: " + e.msg);
   }
   RequireUniqueYamlKeys(root, source);
   return root;
