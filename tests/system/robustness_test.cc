@@ -411,6 +411,15 @@ TEST_F(Robustness, AGpsLogWithoutAUsableFixIsRefused) {
   ExpectOneLineFailure(Run({"--gps", gps.string()}), {gps.string(), "no usable GPS fix"});
 }
 
+TEST_F(Robustness, SkippedGpsFixesAreReportedOnce) {
+  const fs::path gps = dir_ / "gps.csv";
+  WriteLines(gps, {"t,lat,lon", "0.0,49.00030,8.40150", "0.1,95.0,8.40151", "0.2,49.00032,8.40152",
+                   "0.3,49.00033,8.40153", "0.4,49.00034,8.40154", "0.5,49.00035,8.40155"});
+  const CommandResult r = Run({"--gps", gps.string()});
+  ASSERT_TRUE(r.Succeeded()) << r.Describe();
+  EXPECT_EQ(Count(r.out + r.err, gps.string() + ":3"), 1u) << r.Describe();
+}
+
 TEST_F(Robustness, LandmarksFarFromTheDriveAreReported) {
   const fs::path catalogue = dir_ / "far.csv";
   WriteLines(catalogue, {"name,lat,lon", "Null Island,0.0,0.0", "South Pole,-89.9,0.0"});
