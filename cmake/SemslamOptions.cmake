@@ -2,8 +2,8 @@
 add_library(semslam_options INTERFACE)
 target_compile_features(semslam_options INTERFACE cxx_std_20)
 target_compile_options(semslam_options INTERFACE
-  -Wall -Wextra -Wpedantic -Wnon-virtual-dtor -Wcast-align -Woverloaded-virtual -Wimplicit-fallthrough
-  -Wno-missing-field-initializers $<$<CXX_COMPILER_ID:GNU>:-Wshadow=local>)
+  -Wall -Wextra -Wpedantic $<$<CXX_COMPILER_ID:GNU>:-Wshadow=local> -Wnon-virtual-dtor -Wcast-align
+  -Woverloaded-virtual -Wimplicit-fallthrough -Wno-missing-field-initializers)
 # Eigen's fixed-size vectorization needs aligned allocation; C++17 aligned new covers it.
 target_compile_definitions(semslam_options INTERFACE EIGEN_MPL2_ONLY)
 if(SEMSLAM_WERROR)
