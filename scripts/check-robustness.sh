@@ -74,13 +74,14 @@ check "the next run leaves no temporary file of the killed one" $?
 # 3. A reused --out.
 "$bin" run --sequence "$seq" --out "$work/reuse" --frames 0:30 --pacing fast -q --gps "$work/city/oxts" \
   --landmarks "$work/city/landmarks.csv" >/dev/null 2>&1
+echo "a file of the earlier run" >"$work/reuse/plots-of-the-earlier-run.txt"
 before="$(ls "$work/reuse" | wc -l)"
 "$bin" run --sequence "$seq" --out "$work/reuse" --frames 0:20 --pacing fast -q >/dev/null 2>"$work/reuse.err"
 status=$?
 [ "$status" -ne 0 ] && grep -q -- "--overwrite" "$work/reuse.err" && [ "$(json "$work/reuse/run.json" 'd["frames"]')" = 30 ]
 check "a reused --out is refused without --overwrite ($(cat "$work/reuse.err"))" $?
 "$bin" run --sequence "$seq" --out "$work/reuse" --frames 0:20 --pacing fast -q --overwrite >/dev/null 2>&1
-[ ! -e "$work/reuse/landmarks.geojson" ] && [ "$(json "$work/reuse/run.json" 'd["frames"]')" = 20 ]
+[ ! -e "$work/reuse/plots-of-the-earlier-run.txt" ] && [ "$(json "$work/reuse/run.json" 'd["frames"]')" = 20 ]
 check "with --overwrite it holds nothing of the earlier run ($before entries before, $(ls "$work/reuse" | wc -l) after)" $?
 
 # 4. Two runs into one --out at once.
