@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config ccache git
+  clang-14 libclang-rt-14-dev
   libopencv-dev
   libeigen3-dev
   libceres-dev

@@ -1,6 +1,5 @@
 #include "cli_support.h"
 
-#include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -54,8 +53,11 @@ bool Quiet() { return quiet; }
 void SetQuiet(bool value) { quiet = value; }
 
 std::string VersionLine() {
-  return "semslam " + std::string(build_info::kVersion) + " (commit " + std::string(build_info::kCommit) + ", " +
-         std::string(build_info::kBuildType) + ")";
+  RunProvenance binary;
+  binary.version = std::string(build_info::kVersion);
+  binary.commit = std::string(build_info::kCommit);
+  binary.build_type = std::string(build_info::kBuildType);
+  return semslam::VersionLine(binary);
 }
 
 const RunProvenance& Provenance() { return provenance; }
@@ -67,24 +69,7 @@ void SetCommandLine(int argc, char** argv) {
   provenance.build_type = std::string(build_info::kBuildType);
 }
 
-LogFile::LogFile(const std::filesystem::path& path) {
-  // The logger's level (info, or debug with -v) decides what reaches the file; -q only quiets stderr's sink.
-  auto sink = std::make_shared<spdlog::sinks::basic_file_sink_mt>(path.string(), /*truncate=*/true);
-  sink->set_pattern("%Y-%m-%d %H:%M:%S.%e [%l] %v");
-  spdlog::default_logger()->sinks().push_back(sink);
-  sink_ = sink;
-  spdlog::info("{}", VersionLine());
-  spdlog::info("command: {}", ShellQuote(provenance.command));
-}
-
-LogFile::~LogFile() {
-  auto logger = spdlog::default_logger();
-  logger->flush();
-  auto& sinks = logger->sinks();
-  sinks.erase(std::remove_if(sinks.begin(), sinks.end(),
-                             [&](const spdlog::sink_ptr& s) { return static_cast<void*>(s.get()) == sink_.get(); }),
-              sinks.end());
-}
+std::vector<std::string> LogHeader() { return ProvenanceLines(provenance); }
 
 size_t EditDistance(const std::string& a, const std::string& b) {
   const size_t n = a.size(), m = b.size();

@@ -1,5 +1,5 @@
 #pragma once
-// What every subcommand shares: quiet mode, the binary's provenance for run.json, the run.log in a run folder,
+// What every subcommand shares: quiet mode, the binary's provenance for run.json and log files,
 // and "did you mean" suggestions for a mistyped command line.
 
 #include <filesystem>
@@ -26,17 +26,8 @@ std::string VersionLine();
 const RunProvenance& Provenance();
 void SetCommandLine(int argc, char** argv);
 
-// Copies every log message (debug and up when -v, else info and up) to `path` while it lives, with the date.
-class LogFile {
- public:
-  explicit LogFile(const std::filesystem::path& path);
-  ~LogFile();
-  LogFile(const LogFile&) = delete;
-  LogFile& operator=(const LogFile&) = delete;
-
- private:
-  std::shared_ptr<void> sink_;
-};
+// The first lines of a log file (core/log_file.h): the version and the command line.
+std::vector<std::string> LogHeader();
 
 // For a command line CLI11 rejected: "unknown option --fram: did you mean --frames?" for each unknown subcommand
 // or option close to a known one ("; " between them), or "" when nothing is close.

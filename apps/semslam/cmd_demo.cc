@@ -8,6 +8,7 @@
 
 #include "cli_support.h"
 #include "commands.h"
+#include "semslam/core/log_file.h"
 #include "semslam/system/demo.h"
 
 namespace semslam::cli {
@@ -36,7 +37,7 @@ void Run(const DemoArgs& args) {
   options.show_progress = !args.quiet && !Quiet();
   options.provenance = Provenance();
   std::filesystem::create_directories(options.output);
-  const LogFile log(options.output / "demo.log");
+  const LogFile log(options.output / "demo.log", LogHeader());
   const DemoSummary s = RunDemo(options);
   std::printf("demo written to %s (%.0f s)\n", args.out.c_str(), s.seconds);
   std::printf("  trajectory ATE %.3f m over %.0f m (%.3f %%)\n", s.ate_rmse, s.path_length_m,

@@ -36,6 +36,8 @@ struct RunArgs {
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
+  bool overwrite = false;
+  size_t max_bad_frames = 10;
 };
 
 void Run(const RunArgs& args) {
@@ -59,9 +61,8 @@ void Run(const RunArgs& args) {
   options.map_in = args.map_in;
   options.show_progress = !args.quiet && !Quiet();
   options.provenance = Provenance();
-  options.Check();
-  std::filesystem::create_directories(options.output);
-  const LogFile log(options.output / "run.log");
+  options.overwrite = args.overwrite;
+  options.max_bad_frames_in_row = args.max_bad_frames;
   RunSequence(options);
 }
 
@@ -75,7 +76,16 @@ void AddRunCommand(CLI::App& app) {
          "KITTI odometry sequence folder, KITTI raw drive, synthetic city output, or image folder with "
          "camera.yaml")
       ->required();
-  cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  cmd->add_option("--out", args->out,
+                  "Output folder (created if missing). A folder holding an earlier run is refused unless "
+                  "--overwrite is given; two commands never write into one folder at once")
+      ->required();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace the earlier run in --out: everything in that folder is removed before the first frame");
+  cmd->add_option("--max-bad-frames", args->max_bad_frames,
+                  "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
+                  "the command, which still saves what it did")
+      ->capture_default_str();
   cmd->add_option("--mode", args->mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "stereo"}))
       ->capture_default_str();

@@ -10,6 +10,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 
 int main(int argc, char** argv) {
   namespace cli = semslam::cli;
@@ -48,6 +49,8 @@ int main(int argc, char** argv) {
     console->set_level(quiet ? spdlog::level::err : spdlog::level::trace);
   });
 
+  // Ctrl-C / SIGTERM: long commands finish the current frame and save what they did; a second one quits.
+  semslam::InstallInterruptHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -57,6 +60,9 @@ int main(int argc, char** argv) {
     const std::string hint = cli::SuggestCorrections(app, app.remaining(true));
     std::fprintf(stderr, "semslam: bad command line: %s (see --help)\n", hint.empty() ? e.what() : hint.c_str());
     return 2;
+  } catch (const semslam::Interrupted& e) {
+    std::fprintf(stderr, "semslam: %s\n", e.what());
+    return e.ExitCode();
   } catch (const semslam::InputError& e) {
     spdlog::default_logger()->flush();
     std::fprintf(stderr, "semslam: input error: %s\n", e.what());

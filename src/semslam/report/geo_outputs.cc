@@ -158,9 +158,11 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
 
   // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion.
   std::optional<GpsLog> log = inputs.gps;
-  if (!log && !inputs.gps_path.empty()) log = ReadGps(inputs.gps_path, options.gps_read);
+  if (!log && !inputs.gps_path.empty()) {
+    log = ReadGps(inputs.gps_path, options.gps_read);
+    LogSkippedFixes(*log);  // a log passed in was reported by whoever read it
+  }
   if (log) {
-    LogSkippedFixes(*log);
     summary.gps_format = log->format;
     summary.gps_fixes = static_cast<int>(log->fixes.size());
     summary.gps_skipped = static_cast<int>(log->skipped.size());

@@ -78,6 +78,14 @@ bool NeedsQuotes(const std::string& argument) {
 
 }  // namespace
 
+std::string VersionLine(const RunProvenance& provenance) {
+  return "semslam " + provenance.version + " (commit " + provenance.commit + ", " + provenance.build_type + ")";
+}
+
+std::vector<std::string> ProvenanceLines(const RunProvenance& provenance) {
+  return {VersionLine(provenance), "command: " + ShellQuote(provenance.command)};
+}
+
 std::string ShellQuote(const std::vector<std::string>& arguments) {
   std::string line;
   for (const std::string& argument : arguments) {

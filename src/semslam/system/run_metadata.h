@@ -29,6 +29,11 @@ nlohmann::json ProvenanceJson(const RunProvenance& provenance);
 // (every SLAM option by section, as config/default.yaml)}. `slam` is the SlamSystem's effective options.
 nlohmann::json EffectiveConfigJson(const RunOptions& options, const SlamOptions& slam, size_t end_frame);
 
+// "semslam 0.1.0 (commit b88fce6a1c2d-dirty, Release)".
+std::string VersionLine(const RunProvenance& provenance);
+// The first lines of a run's log: the version line and "command: ...".
+std::vector<std::string> ProvenanceLines(const RunProvenance& provenance);
+
 // A command line as one string a POSIX shell reads back (arguments quoted where needed).
 std::string ShellQuote(const std::vector<std::string>& arguments);
 
