@@ -166,16 +166,7 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                                         const cv::Mat& right, const cv::Mat& mask) {
   Require(!finished_, "ProcessFrame after Finish");
-  if (options_.pacing == Pacing::kRealtime) {
-    // Feed frames no faster than the camera recorded them.
-    if (!clock_) {
-      clock_.emplace();
-      first_timestamp_ = timestamp;
-    }
-    const double due_ms = (timestamp - first_timestamp_) * 1000.0;
-    const double wait_ms = due_ms - clock_->ElapsedMs();
-    if (wait_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(wait_ms));
-  }
+  if (options_.pacing == Pacing::kRealtime) pacer_.Wait(timestamp);  // no faster than the camera recorded
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
   if (segmentation_) SubmitForSegmentation(frame_id, left, result);
@@ -280,7 +271,7 @@ std::vector<FramePose> SlamSystem::AllFramePoses() const {
     if (reference == nullptr || !camera_from_world) continue;
     FramePose pose{static_cast<size_t>(record.frame_id), -1, record.timestamp, camera_from_world->Inverse()};
     pose.map_id = reference->map_id();
-    pose.predicted = record.source == PoseSource::kPredicted;
+    pose.predicted = record.source == PoseProvenance::kPredicted;
     poses.push_back(pose);
   }
   return poses;
@@ -374,7 +365,7 @@ SlamStatistics SlamSystem::Statistics() const {
   s.keyframes = map_->NumKeyFrames();
   s.maps = map_->MapIds().size();
   for (const FrameRecord& record : tracker_->records()) {
-    if (record.source == PoseSource::kInterpolated) ++s.interpolated;
+    if (record.source == PoseProvenance::kInterpolated) ++s.interpolated;
   }
   s.keyframes_created = map_->next_keyframe_id();
   s.points_created = map_->next_point_id();

@@ -23,6 +23,7 @@
 #include "semslam/map/map_file.h"
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/semantics/segmentation_worker.h"
+#include "semslam/system/pacing.h"
 #include "semslam/tracking/tracker.h"
 
 namespace semslam {
@@ -156,8 +157,7 @@ class SlamSystem {
   size_t frames_ = 0;
   size_t tracked_ = 0;
   size_t resets_ = 0;
-  double first_timestamp_ = 0.0;
-  std::optional<Stopwatch> clock_;
+  RealtimePacer pacer_;
   bool finished_ = false;
   std::unique_ptr<SegmentationWorker> segmentation_;
   std::atomic<size_t> segmented_keyframes_{0};

@@ -46,15 +46,15 @@ void TrackerOptions::Check() const {
   Require(min_keyframes_to_keep_map >= 1, "tracker: min_keyframes_to_keep_map must be >= 1");
 }
 
-const char* ToString(PoseSource source) {
+const char* ToString(PoseProvenance source) {
   switch (source) {
-    case PoseSource::kNone:
+    case PoseProvenance::kNone:
       return "none";
-    case PoseSource::kTracked:
+    case PoseProvenance::kTracked:
       return "tracked";
-    case PoseSource::kInterpolated:
+    case PoseProvenance::kInterpolated:
       return "interpolated";
-    case PoseSource::kPredicted:
+    case PoseProvenance::kPredicted:
       return "predicted";
   }
   return "?";
@@ -253,7 +253,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   if (state_ == TrackingState::kOk && frame.has_pose()) {
     if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
     record.reference = frame.reference_keyframe;
-    record.source = PoseSource::kTracked;
+    record.source = PoseProvenance::kTracked;
     auto lock = map_.ReadLock();
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
     result.camera_from_world = frame.camera_from_world();

@@ -88,13 +88,13 @@ struct TrackingResult {
 };
 
 // How a frame got its pose.
-enum class PoseSource : std::uint8_t {
+enum class PoseProvenance : std::uint8_t {
   kNone,          // before the first map started
   kTracked,       // tracked (or relocalized) in a map
   kInterpolated,  // between the two frames a monocular map was initialized from
   kPredicted,     // lost: the motion model's prediction from the last tracked frame
 };
-const char* ToString(PoseSource source);
+const char* ToString(PoseProvenance source);
 
 // One entry per processed frame, to rebuild the trajectory after loop closure: the pose relative to a
 // reference keyframe, which keeps following its keyframe when the map is optimized or merged.
@@ -103,7 +103,7 @@ struct FrameRecord {
   double timestamp = 0.0;
   KeyFrame* reference = nullptr;  // nullptr when the frame has no pose
   Rigid3d camera_from_reference;
-  PoseSource source = PoseSource::kNone;
+  PoseProvenance source = PoseProvenance::kNone;
 };
 
 // The frame's pose in its map as it stands now (through its reference keyframe, or the nearest parent of a

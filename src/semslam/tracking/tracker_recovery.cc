@@ -44,7 +44,7 @@ void Tracker::PredictPose(const Frame& frame, FrameRecord& record) const {
   }
   record.reference = last_tracked_reference_;
   record.camera_from_reference = camera_from_reference;
-  record.source = PoseSource::kPredicted;
+  record.source = PoseProvenance::kPredicted;
 }
 
 bool Tracker::Relocalize(Frame& frame) {
