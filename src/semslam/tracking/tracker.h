@@ -46,8 +46,8 @@ struct TrackerOptions {
   int init_min_matches = 100;
   // Initialization matches keypoints of levels [0, init_match_max_level], each within
   // init_match_level_difference levels of the other (forward motion changes the scale).
-  int init_match_max_level = 0;
-  int init_match_level_difference = 0;
+  int init_match_max_level = 2;
+  int init_match_level_difference = 1;
   // Monocular initialization accepts a two-view reconstruction when the init_parallax_rank-th most
   // parallax-rich point has at least init_min_parallax_deg (see geometry/two_view.h).
   double init_min_parallax_deg = 2.0;

@@ -1,0 +1,146 @@
+// The map as an atlas: sessions (drives) and several maps, each with its own origin, merged or discarded.
+
+#include <gtest/gtest.h>
+
+#include "map_test_frames.h"
+#include "semslam/map/map.h"
+#include "semslam/map/map_file.h"
+#include "support/test_support.h"
+
+namespace semslam {
+namespace {
+
+// Adds a keyframe at `z` with `n_points` points of its own, in the active map.
+KeyFrame* AddKeyFrameWithPoints(Map& map, std::uint64_t id, double z, int n_points) {
+  KeyFrame* kf = map.AddKeyFrame(MakeFrame(id, 100, /*stereo=*/false, {0, 0, z}));
+  for (int i = 0; i < n_points; ++i) {
+    MapPoint* p = map.AddMapPoint(Eigen::Vector3d(0.1 * i, 0.0, z + 10.0), kf);
+    p->AddObservation(kf, i);
+    kf->SetMapPoint(i, p);
+  }
+  return kf;
+}
+
+TEST(Atlas, ANewMapIsSessionZeroAndMapZeroWithItsFirstKeyFrameAsOrigin) {
+  Map map;
+  auto lock = map.WriteLock();
+  KeyFrame* a = AddKeyFrameWithPoints(map, 0, 0.0, 5);
+  KeyFrame* b = AddKeyFrameWithPoints(map, 1, 1.0, 5);
+  EXPECT_EQ(map.sessions().size(), 1u);
+  EXPECT_EQ(a->session(), 0u);
+  EXPECT_EQ(a->map_id(), 0u);
+  EXPECT_TRUE(a->is_map_origin());
+  EXPECT_FALSE(b->is_map_origin());
+  EXPECT_EQ(map.MapIds(), std::vector<std::uint32_t>{0});
+}
+
+TEST(Atlas, ANewMapHasItsOwnOriginAndItsOwnKeyFramesAndPoints) {
+  Map map;
+  auto lock = map.WriteLock();
+  AddKeyFrameWithPoints(map, 0, 0.0, 5);
+  AddKeyFrameWithPoints(map, 1, 1.0, 5);
+  EXPECT_EQ(map.StartNewMap(), 1u);
+  KeyFrame* c = AddKeyFrameWithPoints(map, 2, 2.0, 3);
+  AddKeyFrameWithPoints(map, 3, 3.0, 3);
+  EXPECT_EQ(c->map_id(), 1u);
+  EXPECT_TRUE(c->is_map_origin());
+  EXPECT_EQ(map.MapIds(), (std::vector<std::uint32_t>{0, 1}));
+  EXPECT_EQ(map.NumKeyFramesOfMap(0), 2u);
+  EXPECT_EQ(map.NumKeyFramesOfMap(1), 2u);
+  EXPECT_EQ(map.MapPointsOfMap(0).size(), 10u);
+  EXPECT_EQ(map.MapPointsOfMap(1).size(), 6u);
+  for (const MapPoint* p : map.MapPointsOfMap(1)) EXPECT_EQ(p->map_id(), 1u);
+
+  map.ActivateMap(0);
+  EXPECT_FALSE(AddKeyFrameWithPoints(map, 4, 4.0, 1)->is_map_origin());
+  EXPECT_EQ(map.NumKeyFramesOfMap(0), 3u);
+}
+
+TEST(Atlas, MergingMovesEveryKeyFrameAndPointAndLeavesOneOrigin) {
+  Map map;
+  auto lock = map.WriteLock();
+  AddKeyFrameWithPoints(map, 0, 0.0, 5);
+  map.StartNewMap();
+  KeyFrame* c = AddKeyFrameWithPoints(map, 1, 5.0, 4);
+  map.MergeMapInto(1, 0);
+  EXPECT_EQ(map.active_map_id(), 0u);
+  EXPECT_EQ(c->map_id(), 0u);
+  EXPECT_FALSE(c->is_map_origin());
+  EXPECT_EQ(map.MapIds(), std::vector<std::uint32_t>{0});
+  EXPECT_EQ(map.MapPointsOfMap(0).size(), 9u);
+  size_t origins = 0;
+  for (const KeyFrame* kf : map.KeyFramesOfMap(0)) origins += kf->is_map_origin() ? 1 : 0;
+  EXPECT_EQ(origins, 1u);
+  // A new map after a merge gets a fresh id; ids are never reused.
+  EXPECT_EQ(map.StartNewMap(), 2u);
+}
+
+TEST(Atlas, DiscardingAMapErasesOnlyItsKeyFramesAndPoints) {
+  Map map;
+  auto lock = map.WriteLock();
+  AddKeyFrameWithPoints(map, 0, 0.0, 5);
+  map.StartNewMap();
+  KeyFrame* young = AddKeyFrameWithPoints(map, 1, 5.0, 4);
+  map.DiscardMap(1);
+  EXPECT_TRUE(young->is_bad());
+  EXPECT_EQ(map.NumKeyFrames(), 1u);
+  EXPECT_EQ(map.NumMapPoints(), 5u);
+  EXPECT_EQ(map.MapIds(), std::vector<std::uint32_t>{0});
+}
+
+TEST(Atlas, SessionsNumberTheDrivesAndTagTheirKeyFrames) {
+  Map map;
+  auto lock = map.WriteLock();
+  map.NameCurrentSession("07", "/data/07");
+  AddKeyFrameWithPoints(map, 0, 0.0, 2);
+  EXPECT_EQ(map.BeginSession("07 again", "/data/07"), 1u);
+  KeyFrame* second = AddKeyFrameWithPoints(map, 1, 0.0, 2);
+  EXPECT_EQ(second->session(), 1u);
+  ASSERT_EQ(map.sessions().size(), 2u);
+  EXPECT_EQ(map.sessions()[0].name, "07");
+  EXPECT_EQ(map.sessions()[1].name, "07 again");
+  EXPECT_THROW(map.RestoreSessions({{1, "x", "y"}}), InvalidArgument);
+}
+
+TEST(Atlas, TheMapFileKeepsSessionsMapsAndOrigins) {
+  testing::TempDir dir;
+  Map map;
+  {
+    auto lock = map.WriteLock();
+    map.NameCurrentSession("first", "/a");
+    AddKeyFrameWithPoints(map, 0, 0.0, 3);
+    AddKeyFrameWithPoints(map, 1, 1.0, 3);
+    map.BeginSession("second", "/b");
+    map.StartNewMap();
+    AddKeyFrameWithPoints(map, 2, 2.0, 3);
+    AddKeyFrameWithPoints(map, 3, 3.0, 3);
+    for (KeyFrame* kf : map.KeyFrames()) kf->UpdateConnections();
+  }
+  const auto path = dir / "map.semslam";
+  {
+    auto lock = map.ReadLock();
+    WriteMapFile(path, map);
+  }
+  Map loaded;
+  auto lock = loaded.WriteLock();
+  ReadMapFile(path, loaded);
+  ASSERT_EQ(loaded.sessions().size(), 2u);
+  EXPECT_EQ(loaded.sessions()[1].name, "second");
+  EXPECT_EQ(loaded.sessions()[1].source, "/b");
+  EXPECT_EQ(loaded.active_map_id(), 1u);
+  EXPECT_EQ(loaded.next_map_id(), 2u);
+  const auto kfs = loaded.KeyFrames();
+  ASSERT_EQ(kfs.size(), 4u);
+  const std::vector<std::uint32_t> sessions = {0, 0, 1, 1}, maps = {0, 0, 1, 1};
+  const std::vector<bool> origins = {true, false, true, false};
+  for (size_t k = 0; k < kfs.size(); ++k) {
+    EXPECT_EQ(kfs[k]->session(), sessions[k]) << k;
+    EXPECT_EQ(kfs[k]->map_id(), maps[k]) << k;
+    EXPECT_EQ(kfs[k]->is_map_origin(), origins[k]) << k;
+  }
+  // The loaded atlas goes on numbering maps after the stored ones.
+  EXPECT_EQ(loaded.StartNewMap(), 2u);
+}
+
+}  // namespace
+}  // namespace semslam
