@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/sequence_composer.h"
@@ -19,6 +20,7 @@ struct ComposeArgs {
   std::string frames;
   std::string black;
   bool stereo = false;
+  bool quiet = false;
 };
 
 void Compose(const ComposeArgs& a) {
@@ -26,7 +28,7 @@ void Compose(const ComposeArgs& a) {
   size_t black_first = 0, black_end = 0;
   if (!a.black.empty()) ParseFrameRange(a.black, &black_first, &black_end);
   WriteComposedSequence(*source, ComposeFrames(ParseFrameList(a.frames), black_first, black_end), a.out,
-                        a.stereo);
+                        a.stereo, /*show_progress=*/!a.quiet && !Quiet());
 }
 
 }  // namespace
@@ -45,6 +47,7 @@ void AddComposeCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--black", args->black, "Composed frames A:B (A..B-1) as black images");
   cmd->add_flag("--stereo", args->stereo, "Write the right images too (when the source has them)");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Compose(*args); });
 }
 

@@ -59,6 +59,11 @@ TEST(WriteComposedSequence, KittiForthAndBackWithTruthAndABlackFrame) {
   EXPECT_GT(step, 0.1);  // the car moves
   EXPECT_NEAR((*truth)[2].world_from_camera.translation.norm(), step, 1e-6);
 
+  // A cut (frames left out) leaves a gap in time, as dropped frames do.
+  WriteComposedSequence(*source, ComposeFrames({10, 11, 16}), dir / "cut", false);
+  const auto cut = OpenSequence(dir / "cut");
+  EXPECT_NEAR(cut->Timestamp(2) - cut->Timestamp(1), 5 * (cut->Timestamp(1) - cut->Timestamp(0)), 1e-3);
+
   // Frames the source does not have, and a folder already in use, are refused.
   EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({1000}), dir / "other", false), InputError);
   EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({1}), dir / "composed", false), InputError);

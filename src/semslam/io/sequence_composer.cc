@@ -85,7 +85,7 @@ std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size
 }
 
 void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
-                           const fs::path& out, bool stereo) {
+                           const fs::path& out, bool stereo, bool show_progress) {
   Require(!frames.empty(), "compose: no frames");
   for (const ComposedFrame& f : frames) {
     if (f.source_frame >= source.size()) {
@@ -103,8 +103,9 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
   const double dt = FrameInterval(source);
   const std::optional<std::vector<Rigid3d>> truth = TruthByFrame(source);
   std::string times, poses;
+  double time = 0.0;
   std::vector<Rigid3d> truth_out;
-  ProgressReporter progress("compose", frames.size(), true);
+  ProgressReporter progress("compose", frames.size(), show_progress);
   for (size_t i = 0; i < frames.size(); ++i) {
     const ComposedFrame& f = frames[i];
     const std::string name = fmt::format("{:06d}.png", i);
@@ -113,7 +114,13 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
       if (f.black) image = cv::Mat::zeros(image.size(), image.type());
       WritePng(out / (camera == 0 ? "left" : "right") / name, image);
     }
-    times += fmt::format("{:.6f}\n", static_cast<double>(i) * dt);
+    // A jump of k source frames takes k frame intervals, as frames dropped by a camera would.
+    if (i > 0) {
+      const size_t previous = frames[i - 1].source_frame;
+      const size_t jump = f.source_frame > previous ? f.source_frame - previous : previous - f.source_frame;
+      time += dt * static_cast<double>(std::max<size_t>(1, jump));
+    }
+    times += fmt::format("{:.6f}\n", time);
     if (truth)
       truth_out.push_back((*truth)[frames.front().source_frame].Inverse() * (*truth)[f.source_frame]);
     progress.Update(i + 1, "");

@@ -31,9 +31,10 @@ std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size
                                          size_t black_end = 0);
 
 // Writes the composed sequence into `out` (created; it must be empty or missing): images (left, and right
-// when `stereo` and the source has a second camera), times.txt, gt.txt (KITTI poses, when the source has a
+// when `stereo` and the source has a second camera), times.txt (at the source's frame rate; a jump over k
+// source frames takes k intervals), gt.txt (KITTI poses, when the source has a
 // ground truth) and camera.yaml. Throws InputError for frames the source does not have.
 void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
-                           const std::filesystem::path& out, bool stereo);
+                           const std::filesystem::path& out, bool stereo, bool show_progress = false);
 
 }  // namespace semslam

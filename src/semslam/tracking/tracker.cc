@@ -258,9 +258,12 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
     result.camera_from_world = frame.camera_from_world();
     result.matched_points = inliers_;
+    const bool previous_tracked = frames_since_tracked_ == 0 && last_tracked_reference_ != nullptr;
     last_tracked_reference_ = record.reference;
     last_tracked_camera_from_reference_ = record.camera_from_reference;
     last_velocity_ = velocity_;
+    if (previous_tracked) last_step_seconds_ = timestamp - last_tracked_time_;
+    last_tracked_time_ = timestamp;
     frames_since_tracked_ = 0;
   } else {
     ++frames_since_tracked_;

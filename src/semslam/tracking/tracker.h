@@ -197,6 +197,8 @@ class Tracker {
   KeyFrame* last_tracked_reference_ = nullptr;
   Rigid3d last_tracked_camera_from_reference_;
   std::optional<Rigid3d> last_velocity_;
+  double last_tracked_time_ = 0.0;
+  double last_step_seconds_ = 0.0;  // between the last two tracked frames: the time last_velocity_ covers
   int frames_since_tracked_ = 0;
 
   // Monocular initialization state: the first frame, where its features were seen last, and the frames

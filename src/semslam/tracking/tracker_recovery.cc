@@ -69,9 +69,13 @@ bool Tracker::Relocalize(Frame& frame) {
     if (camera_from_world) {
       const Eigen::Vector3d center = camera_from_world->Inverse().translation;
       const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
-      // Three times the distance the last motion would cover, and never less than half the scene depth.
-      const double radius =
-          std::max(3.0 * step * (frames_since_tracked_ + 1), 0.5 * last_reference->SceneDepthQuantile(2));
+      // Three times the distance the last motion would cover in the time since the last tracked frame (by the
+      // clock, not by frames: dropped frames leave a gap in time), and never less than half the scene depth.
+      const double steps_since_tracked =
+          last_step_seconds_ > 0.0 ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
+                                   : static_cast<double>(frames_since_tracked_ + 1);
+      const double radius = std::max(3.0 * step * std::max(1.0, steps_since_tracked),
+                                     0.5 * last_reference->SceneDepthQuantile(2));
       relocalization.plausible = [center, radius, id = frame.id()](const Frame& f) {
         const double distance = (f.center() - center).norm();
         if (distance <= radius) return true;
