@@ -1,0 +1,324 @@
+// LoopCloser, the correction side: moving a map onto another (merges), correcting the keyframes and points
+// around a loop, the essential graph and the global bundle adjustment after it.
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <unordered_map>
+
+#include "semslam/core/error.h"
+#include "semslam/loop/loop_closer.h"
+#include "semslam/map/map_matcher.h"
+#include "semslam/mapping/local_mapper.h"
+#include "semslam/mapping/map_optimization.h"
+#include "semslam/optim/bundle_adjustment.h"
+#include "semslam/optim/pose_graph.h"
+#include "semslam/optim/sim3_optimization.h"
+
+namespace semslam {
+namespace {
+
+// The rigid pose of a similarity camera_from_world: rotation kept, translation divided by the scale.
+Rigid3d ToRigid(const Sim3d& s) { return Rigid3d(s.rotation, s.translation / s.scale); }
+
+}  // namespace
+
+double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
+  // current_from_world_ is the current keyframe's pose in the matched map's frame: the same transform takes
+  // every pose and point of its map there (with the scale between the two, monocular).
+  const std::uint32_t from = current->map_id(), into = matched_keyframe_->map_id();
+  const Sim3d into_from_current_map = current_from_world_.Inverse() * Sim3d(current->camera_from_world());
+  const Sim3d current_map_from_into = into_from_current_map.Inverse();
+  for (MapPoint* p : map_.MapPointsOfMap(from)) {
+    p->SetPosition(into_from_current_map * p->position());
+    p->UpdateNormalAndDepth();
+  }
+  for (KeyFrame* kf : map_.KeyFramesOfMap(from)) {
+    kf->SetPose(ToRigid(Sim3d(kf->camera_from_world()) * current_map_from_into));
+  }
+  map_.MergeMapInto(from, into);
+  spdlog::info("map {} moved into the frame of map {} (scale {:.3f}) and merged", from, into,
+               into_from_current_map.scale);
+  return into_from_current_map.scale;
+}
+
+void LoopCloser::CorrectLoop(KeyFrame* current) {
+  ScopedTimer timer(timing_, "loop_correction");
+  const bool merge = matched_keyframe_->map_id() != current->map_id();
+  spdlog::info(
+      "{} detected: keyframe {} (map {}) matches keyframe {} (map {}), {} matches, confirmed by {} "
+      "neighbours",
+      merge ? "map merge" : "loop", current->id(), current->map_id(), matched_keyframe_->id(),
+      matched_keyframe_->map_id(), last_matches_, last_verified_);
+  mapper_.RequestStop();
+  StopGlobalBundleAdjustment();
+  while (!mapper_.IsStopped() && !mapper_.IsFinished())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+
+  LoopEvent event;
+  event.query_keyframe = current->id();
+  event.matched_keyframe = matched_keyframe_->id();
+  event.query_timestamp = current->timestamp();
+  event.matches = last_matches_;
+  event.verified_neighbours = last_verified_;
+  event.scale = current_from_world_.scale;
+  event.merge = merge;
+  event.map_id = current->map_id();
+  event.matched_map_id = matched_keyframe_->map_id();
+
+  std::map<KeyFrame*, std::set<KeyFrame*>> loop_connections;
+  std::map<KeyFrame*, Sim3d> corrected, non_corrected;
+  {
+    auto lock = map_.WriteLock();
+    if (merge) event.scale = MoveMapToMatchedFrame(current);
+    current->UpdateConnections();
+    std::vector<KeyFrame*> connected = current->Covisibles();
+    connected.push_back(current);
+    const Rigid3d world_from_current = current->world_from_camera();
+    event.correction_m = (ToRigid(current_from_world_).Inverse().translation - current->center()).norm();
+
+    // Propagate the correction to the keyframes around the current one through their relative poses.
+    corrected[current] = current_from_world_;
+    for (KeyFrame* kf : connected) {
+      const Sim3d original = Sim3d(kf->camera_from_world());
+      non_corrected[kf] = original;
+      if (kf != current) {
+        const Sim3d kf_from_current = Sim3d(kf->camera_from_world() * world_from_current);
+        corrected[kf] = kf_from_current * current_from_world_;
+      }
+    }
+    // Move their points and poses.
+    for (const auto& [kf, corrected_pose] : corrected) {
+      const Sim3d world_from_corrected = corrected_pose.Inverse();
+      const Sim3d& original = non_corrected[kf];
+      for (MapPoint* p : kf->map_points()) {
+        if (p == nullptr || p->is_bad() || p->corrected_by_keyframe == current->id()) continue;
+        p->SetPosition(world_from_corrected * (original * p->position()));
+        p->corrected_by_keyframe = current->id();
+        p->corrected_reference = kf->id();
+        p->UpdateNormalAndDepth();
+      }
+      kf->SetPose(ToRigid(corrected_pose));
+      kf->UpdateConnections();
+    }
+    // Fuse the loop: matched points replace the current keyframe's duplicates.
+    for (size_t i = 0; i < current_matched_points_.size(); ++i) {
+      MapPoint* loop_point = current_matched_points_[i];
+      if (loop_point == nullptr || loop_point->is_bad()) continue;
+      MapPoint* existing = current->map_point(static_cast<int>(i));
+      if (existing == loop_point) continue;
+      if (existing != nullptr && !existing->is_bad()) {
+        existing->ReplaceWith(loop_point);
+        map_.EraseMapPoint(existing);
+      } else if (!loop_point->IsObservedBy(current)) {
+        loop_point->AddObservation(current, static_cast<int>(i));
+        current->SetMapPoint(static_cast<int>(i), loop_point);
+        loop_point->UpdateDescriptor();
+      }
+    }
+    // Project the loop's points into every corrected keyframe and merge duplicates.
+    for (const auto& [kf, corrected_pose] : corrected) {
+      std::vector<MapPoint*> replace;
+      FuseWithSim3(*kf, corrected_pose, loop_points_, 4.0f, replace);
+      for (size_t j = 0; j < replace.size(); ++j) {
+        if (replace[j] != nullptr && !replace[j]->is_bad() && !loop_points_[j]->is_bad()) {
+          replace[j]->ReplaceWith(loop_points_[j]);
+          map_.EraseMapPoint(replace[j]);
+        }
+      }
+    }
+    // The new links the loop created.
+    for (KeyFrame* kf : connected) {
+      const std::vector<KeyFrame*> before = kf->Covisibles();
+      kf->UpdateConnections();
+      std::set<KeyFrame*> links(kf->Covisibles().begin(), kf->Covisibles().end());
+      for (KeyFrame* b : before) links.erase(b);
+      for (KeyFrame* c : connected) links.erase(c);
+      loop_connections[kf] = links;
+    }
+    OptimizeEssentialGraph(matched_keyframe_, current, non_corrected, corrected, loop_connections);
+    map_.NotifyBigChange();
+    matched_keyframe_->AddLoopEdge(current);
+    current->AddLoopEdge(matched_keyframe_);
+  }
+  {
+    std::lock_guard lock(loops_mutex_);
+    events_.push_back(event);
+  }
+  if (options_.global_ba) {
+    global_ba_abort_ = false;
+    global_ba_running_ = true;
+    const std::uint64_t id = current->id();
+    const std::uint32_t map_id = current->map_id();
+    global_ba_thread_ = std::thread([this, id, map_id] { RunGlobalBundleAdjustment(id, map_id); });
+  }
+  mapper_.Release();
+  last_loop_keyframe_id_ = current->id();
+}
+
+void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
+                                        const std::map<KeyFrame*, Sim3d>& non_corrected,
+                                        const std::map<KeyFrame*, Sim3d>& corrected,
+                                        const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections) {
+  ScopedTimer timer(timing_, "essential_graph");
+  constexpr int kMinWeight = 100;
+  const std::vector<KeyFrame*> keyframes = map_.KeyFramesOfMap(current->map_id());
+  PoseGraph graph;
+  std::unordered_map<const KeyFrame*, int> node;
+  std::unordered_map<const KeyFrame*, Sim3d> before;  // camera_from_world used for relative measurements
+  for (KeyFrame* kf : keyframes) {
+    if (kf->is_bad()) continue;
+    const auto c = corrected.find(kf);
+    const Sim3d camera_from_world = c != corrected.end() ? c->second : Sim3d(kf->camera_from_world());
+    const auto nc = non_corrected.find(kf);
+    before[kf] = nc != non_corrected.end() ? nc->second : Sim3d(kf->camera_from_world());
+    node[kf] = graph.AddNode(camera_from_world.Inverse(), kf == loop_keyframe || kf->is_map_origin());
+  }
+  std::set<std::pair<int, int>> added;
+  auto add_edge = [&](KeyFrame* a, KeyFrame* b, bool use_corrected) {
+    const auto ia = node.find(a), ib = node.find(b);
+    if (ia == node.end() || ib == node.end()) return;
+    const auto key = std::minmax(ia->second, ib->second);
+    if (!added.insert(key).second) return;
+    // a_from_b measured from the poses before the correction (or after it, for the new loop links).
+    Sim3d a_cw = before[a], b_cw = before[b];
+    if (use_corrected) {
+      const auto ca = corrected.find(a), cb = corrected.find(b);
+      if (ca != corrected.end()) a_cw = ca->second;
+      if (cb != corrected.end()) b_cw = cb->second;
+    }
+    graph.AddRelativeEdge(ia->second, ib->second, a_cw * b_cw.Inverse(), 1.0);
+  };
+  // Loop links first (measured with the corrected poses), then the spanning tree, loop edges and strong
+  // covisibility.
+  for (const auto& [kf, links] : loop_connections) {
+    for (KeyFrame* other : links) {
+      if ((kf == current || other == loop_keyframe) || kf->ConnectionWeight(other) >= kMinWeight) {
+        add_edge(kf, other, true);
+      }
+    }
+  }
+  for (KeyFrame* kf : keyframes) {
+    if (kf->is_bad()) continue;
+    if (kf->parent() != nullptr) add_edge(kf, kf->parent(), false);
+    for (KeyFrame* other : kf->loop_edges()) add_edge(kf, other, false);
+    for (KeyFrame* other : kf->CovisiblesWithWeightAtLeast(kMinWeight)) add_edge(kf, other, false);
+  }
+  PoseGraphOptions options;
+  options.fix_scale = options_.fix_scale;
+  options.max_iterations = 20;
+  graph.Optimize(options);
+
+  // Poses from the graph; each point follows the keyframe that corrected it (or its reference).
+  std::unordered_map<std::uint64_t, std::pair<Sim3d, Sim3d>> change;  // id -> (before cw, after wc)
+  for (const auto& [kf, index] : node) {
+    const Sim3d world_from_kf = graph.world_from_node(index);
+    const Sim3d camera_from_world = world_from_kf.Inverse();
+    change[kf->id()] = {before[kf], world_from_kf};
+    const_cast<KeyFrame*>(kf)->SetPose(ToRigid(camera_from_world));
+  }
+  for (MapPoint* p : map_.MapPointsOfMap(current->map_id())) {
+    if (p->is_bad()) continue;
+    const std::uint64_t ref = p->corrected_by_keyframe == current->id()
+                                  ? p->corrected_reference
+                                  : (p->reference_keyframe() ? p->reference_keyframe()->id() : UINT64_MAX);
+    const auto it = change.find(ref);
+    if (it == change.end()) continue;
+    // For corrected points, `before` of the reference is the corrected pose they were moved with.
+    const auto c = corrected.find(map_.KeyFrameById(ref));
+    const Sim3d& reference_cw =
+        (p->corrected_by_keyframe == current->id() && c != corrected.end()) ? c->second : it->second.first;
+    p->SetPosition(it->second.second * (reference_cw * p->position()));
+    p->UpdateNormalAndDepth();
+  }
+}
+
+void LoopCloser::StopGlobalBundleAdjustment() {
+  if (!global_ba_thread_.joinable()) return;
+  global_ba_abort_ = true;
+  global_ba_thread_.join();
+}
+
+void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
+  ScopedTimer timer(timing_, "global_ba");
+  spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
+  BundleAdjustmentProblem problem;
+  std::vector<KeyFrame*> keyframes;
+  std::vector<MapPoint*> points;
+  {
+    auto lock = map_.ReadLock();
+    keyframes = map_.KeyFramesOfMap(map_id);
+    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
+      if (!p->is_bad()) points.push_back(p);
+    }
+    BuildBundleAdjustmentProblem(keyframes, {}, points, &problem, nullptr);
+  }
+  BundleAdjustmentOptions options;
+  options.iterations = options_.global_ba_iterations;
+  options.abort = &global_ba_abort_;
+  options.refine_without_outliers = false;
+  BundleAdjust(problem, options);
+  if (global_ba_abort_) {
+    ReleaseFreeMemory();
+    global_ba_running_ = false;
+    return;
+  }
+  // Apply under a stopped mapper: keyframes created during the BA follow their parents' corrections.
+  mapper_.RequestStop();
+  while (!mapper_.IsStopped() && !mapper_.IsFinished())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  {
+    auto lock = map_.WriteLock();
+    std::unordered_map<const KeyFrame*, size_t> in_ba;
+    for (size_t i = 0; i < keyframes.size(); ++i) in_ba[keyframes[i]] = i;
+    // Corrections before -> after per keyframe, propagated down the spanning tree.
+    std::unordered_map<const KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
+    for (size_t i = 0; i < keyframes.size(); ++i) {
+      if (keyframes[i]->is_bad()) continue;
+      correction[keyframes[i]] = {keyframes[i]->camera_from_world(), problem.camera_from_world[i]};
+    }
+    for (KeyFrame* kf : map_.KeyFramesOfMap(map_id)) {
+      if (kf->is_bad() || correction.count(kf)) continue;
+      // Walk up to an ancestor that has a correction.
+      std::vector<KeyFrame*> chain = {kf};
+      KeyFrame* a = kf->parent();
+      while (a != nullptr && !correction.count(a)) {
+        chain.push_back(a);
+        a = a->parent();
+      }
+      if (a == nullptr) continue;
+      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+        KeyFrame* child = *it;
+        KeyFrame* parent = child->parent();
+        const auto& [parent_before, parent_after] = correction[parent];
+        const Rigid3d child_from_parent = child->camera_from_world() * parent_before.Inverse();
+        correction[child] = {child->camera_from_world(), child_from_parent * parent_after};
+      }
+    }
+    for (const auto& [kf, c] : correction) const_cast<KeyFrame*>(kf)->SetPose(c.second);
+    std::unordered_map<const MapPoint*, size_t> point_index;
+    for (size_t j = 0; j < points.size(); ++j) point_index[points[j]] = j;
+    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
+      if (p->is_bad()) continue;
+      const auto it = point_index.find(p);
+      if (it != point_index.end()) {
+        p->SetPosition(problem.points[it->second]);
+      } else if (p->reference_keyframe() != nullptr) {
+        const auto c = correction.find(p->reference_keyframe());
+        if (c != correction.end())
+          p->SetPosition(c->second.second.Inverse() * (c->second.first * p->position()));
+      }
+      p->UpdateNormalAndDepth();
+    }
+    map_.NotifyBigChange();
+  }
+  mapper_.Release();
+  ReleaseFreeMemory();  // the solver's working memory is several times the map's
+  ++num_global_ba_;
+  global_ba_running_ = false;
+  spdlog::info("global bundle adjustment done");
+}
+
+}  // namespace semslam
