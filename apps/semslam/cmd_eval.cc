@@ -1,5 +1,5 @@
-// semslam eval --estimate F --truth F [--align sim3|se3|none] [--times FILE] [--max-dt S]: one JSON object on
-// stdout.
+// semslam eval --estimate F --truth F|DIR [--camera NAME] [--align sim3|se3|none] [--times FILE]
+// [--max-dt S]: one JSON object on stdout.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -16,6 +16,7 @@ namespace {
 struct EvalArgs {
   std::string estimate;
   std::string truth;
+  std::string camera;
   std::string align = "sim3";
   std::string times;
   double max_dt = 0.02;
@@ -69,7 +70,14 @@ void AddEvalCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("eval", "Compare an estimated trajectory with the ground truth (JSON on stdout)");
   cmd->add_option("--estimate", args->estimate, "Estimated trajectory (TUM or KITTI poses)")->required();
-  cmd->add_option("--truth", args->truth, "Ground-truth trajectory (TUM or KITTI poses)")->required();
+  cmd->add_option(
+         "--truth", args->truth,
+         "Ground-truth trajectory (TUM or KITTI poses), or a sequence folder with a ground truth: a "
+         "KITTI odometry sequence with poses/, a KITTI raw drive (its OXTS poses), the synthetic city")
+      ->required();
+  cmd->add_option("--camera", args->camera,
+                  "With a sequence folder as --truth: the camera whose poses are the truth (as semslam run "
+                  "--camera; default image_00 / image_0)");
   cmd->add_option("--align", args->align, "Alignment before ATE: sim3 (monocular), se3 (stereo) or none")
       ->check(CLI::IsMember({"sim3", "se3", "none"}))
       ->capture_default_str();
@@ -85,7 +93,8 @@ void AddEvalCommand(CLI::App& app) {
     options.rpe_distance_m = 100.0;  // the rpe_100m_* fields
     const std::optional<std::filesystem::path> times =
         args->times.empty() ? std::nullopt : std::optional<std::filesystem::path>(args->times);
-    const TrajectoryEvaluation result = EvaluateTrajectoryFiles(args->estimate, args->truth, times, options);
+    const TrajectoryEvaluation result =
+        EvaluateTrajectoryFiles(args->estimate, args->truth, times, options, args->camera);
     const std::string text = ToJson(result, options).dump(2);
     std::fprintf(stdout, "%s\n", text.c_str());
   });

@@ -123,10 +123,17 @@ AteResult ComputeAte(const Trajectory& estimate, const Trajectory& truth, Alignm
 
 // Reads two trajectory files (TUM or KITTI, see io/trajectory_io.h) and evaluates them. KITTI files take
 // their timestamps from `times` when given (it may list more stamps than poses), else their line index; a TUM
-// file cannot be matched against a KITTI file without `times`. Throws InputError naming the files.
+// file cannot be matched against a KITTI file without `times`. The truth may also be a sequence folder whose
+// reader has a ground truth (io/sequence.h: a KITTI odometry sequence with poses/, a KITTI raw drive with
+// oxts/, the synthetic city), for its camera `truth_camera` (empty: the default one), with the sequence's
+// timestamps. Throws InputError naming the files.
 TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estimate,
                                              const std::filesystem::path& truth,
                                              const std::optional<std::filesystem::path>& times,
-                                             const EvalOptions& options = {});
+                                             const EvalOptions& options = {},
+                                             const std::string& truth_camera = {});
+// The ground truth of a sequence folder (see EvaluateTrajectoryFiles). Throws InputError naming the folder
+// when its reader has none.
+Trajectory ReadSequenceGroundTruth(const std::filesystem::path& sequence, const std::string& camera = {});
 
 }  // namespace semslam

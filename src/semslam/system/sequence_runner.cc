@@ -106,8 +106,8 @@ nlohmann::json AccuracyJson(const ClassAccuracyCounts& counts) {
 RunSummary RunSequence(const RunOptions& options) {
   options.Check();
   Stopwatch watch;
-  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
   const bool stereo = options.slam.mode == SensorMode::kStereo;
+  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence, {options.camera, stereo});
   const size_t first = options.first_frame;
   const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "run");
   // Inputs read after SLAM are checked now, so that a malformed file stops the run before its first frame.
@@ -122,9 +122,10 @@ RunSummary RunSequence(const RunOptions& options) {
     if (catalogue->empty()) throw InputError(options.landmarks, "the landmark catalogue holds no landmark");
   }
   std::filesystem::create_directories(options.output);
-  spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
-               sequence->directory().string(), first, end - 1, stereo ? "stereo" : "monocular",
-               sequence->camera().ToString());
+  spdlog::info("sequence {} ({}{}), frames {}..{}, {} mode, camera {}", sequence->name(),
+               sequence->directory().string(),
+               sequence->camera_name().empty() ? "" : ", " + sequence->camera_name(), first, end - 1,
+               stereo ? "stereo" : "monocular", sequence->camera().ToString());
 
   SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
   if (!options.map_in.empty()) slam.LoadMap(options.map_in);
@@ -138,10 +139,13 @@ RunSummary RunSequence(const RunOptions& options) {
   ProgressReporter progress("run", end - first, options.show_progress);
   // Per frame: how tracking went and how big the map was (tracking time against map size).
   std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points\n";
+  // A colour camera's frames go to the segmenter in colour and to tracking in grey (one decode for both).
+  const bool segment_color = segmenter && sequence->IsColor();
   for (size_t i = first; i < end; ++i) {
-    const cv::Mat left = sequence->LoadImage(i, 0);
+    const cv::Mat color = segment_color ? sequence->LoadColorImage(i) : cv::Mat();
+    const cv::Mat left = color.empty() ? sequence->LoadImage(i, 0) : GreyFromColor(color);
     const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
-    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
+    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right, {}, color);
     size_t keyframes = 0, points = 0;
     {
       auto lock = slam.map().ReadLock();
@@ -191,6 +195,7 @@ RunSummary RunSequence(const RunOptions& options) {
   summary.seconds = watch.ElapsedSeconds();
   nlohmann::json run = {
       {"sequence", sequence->directory().string()},
+      {"camera", sequence->camera_name()},
       {"mode", stereo ? "stereo" : "mono"},
       {"frames", stats.frames},
       {"first_frame", first},

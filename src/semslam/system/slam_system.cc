@@ -155,7 +155,7 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 }
 
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
-                                        const cv::Mat& right, const cv::Mat& mask) {
+                                        const cv::Mat& right, const cv::Mat& mask, const cv::Mat& color) {
   Require(!finished_, "ProcessFrame after Finish");
   if (options_.pacing == Pacing::kRealtime) {
     // Feed frames no faster than the camera recorded them.
@@ -169,7 +169,7 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   }
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
-  if (segmentation_) SubmitForSegmentation(frame_id, left, result);
+  if (segmentation_) SubmitForSegmentation(frame_id, color.empty() ? left : color, result);
   if (result.state == TrackingState::kOk) ++tracked_;
   if (result.reset_requested) ResetMap();
   if (options_.pacing == Pacing::kSynchronous && (result.new_keyframe || result.initialized_now)) {
