@@ -123,6 +123,7 @@ std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir, const Seq
   files.camera.fy = p(1, 1);
   files.camera.cx = p(0, 2);
   files.camera.cy = p(1, 2);
+  files.calibration = calib.file;
   files.camera.width = static_cast<int>(std::lround(size[0]));
   files.camera.height = static_cast<int>(std::lround(size[1]));
   if (!(files.camera.width > 0) || !(files.camera.height > 0)) {
