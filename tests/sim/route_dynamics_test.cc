@@ -43,7 +43,7 @@ Dynamics Measure(const Route& route, double rate_hz) {
 // stopped turning from a heading the car had not driven yet; every turn was taken at 8 m/s or more (61 deg/s,
 // 8.5 m/s^2). Forty towns, 1500 frames each.
 TEST(RouteDynamics, WithinTheLimitsOfACarOnEverySeed) {
-  double worst_yaw = 0;
+  double worst_yaw = 0, worst_lateral = 0;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
     for (const std::uint64_t town : {seed, seed * 1000 + 242}) {
       SynthOptions o = PresetOptions("default");
@@ -56,6 +56,7 @@ TEST(RouteDynamics, WithinTheLimitsOfACarOnEverySeed) {
       EXPECT_LE(d.max_yaw_rate, kRouteMaxYawRate * 1.01) << where;
       EXPECT_LE(d.max_lateral, kRouteMaxLateralAcceleration * 1.02) << where;
       worst_yaw = std::max(worst_yaw, d.max_yaw_per_frame);
+      worst_lateral = std::max(worst_lateral, d.max_lateral);
       // Never back the way it came: no intersection follows the one before the last.
       const std::vector<int>& seq = route.intersections;
       for (size_t k = 2; k < seq.size(); ++k) EXPECT_NE(seq[k], seq[k - 2]) << "seed " << town << ", step " << k;
@@ -73,6 +74,7 @@ TEST(RouteDynamics, WithinTheLimitsOfACarOnEverySeed) {
     }
   }
   RecordProperty("max_yaw_deg_per_frame", std::to_string(worst_yaw / kDegree));
+  RecordProperty("max_lateral_m_s2", std::to_string(worst_lateral));
   EXPECT_LE(worst_yaw, 4.0 * kDegree * 1.01);  // 40 deg/s at 10 Hz
   EXPECT_GT(worst_yaw, 3.0 * kDegree);         // the tightest turns do use the limit
 }
@@ -85,6 +87,9 @@ TEST(RouteDynamics, SeedsOfTheIssue) {
     o.route.frames = 1500;
     const SyntheticCity sim(o);
     const Dynamics d = Measure(sim.route(), o.route.rate_hz);
+    RecordProperty("seed_" + std::to_string(town), std::to_string(d.max_yaw_per_frame / kDegree) +
+                                                       " deg per frame, " + std::to_string(d.max_lateral) +
+                                                       " m/s^2");
     EXPECT_LE(d.max_yaw_per_frame, 4.0 * kDegree * 1.01) << town;
     EXPECT_LE(d.max_lateral, kRouteMaxLateralAcceleration * 1.02) << town;
   }
