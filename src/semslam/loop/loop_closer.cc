@@ -20,6 +20,7 @@
 #include "semslam/place/vocabulary.h"
 
 namespace semslam {
+
 void LoopCloserOptions::Check() const {
   Require(consistency_threshold >= 1, "loop closer: consistency_threshold must be >= 1");
   Require(min_keyframes_between_loops >= 0, "loop closer: min_keyframes_between_loops must be >= 0");
@@ -28,6 +29,8 @@ void LoopCloserOptions::Check() const {
   Require(global_ba_iterations > 0, "loop closer: global_ba_iterations must be positive");
   Require(min_verified_neighbours >= 0 && min_verified_neighbours <= 5 && verification_matches >= 3,
           "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
+  Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,
+          "loop closer: max_stereo_correction_ratio must be positive and stereo_correction_slack_m >= 0");
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -289,6 +292,7 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
           current->id(), candidate->id(), last_matches_, last_verified_, options_.min_verified_neighbours);
       continue;
     }
+    if (!CorrectionAgreesWithOdometry(current, candidate)) continue;
     {
       lock.unlock();
       auto write = map_.WriteLock();
@@ -298,6 +302,28 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
       return true;
     }
   }
+  return false;
+}
+
+bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const {
+  if (!options_.fix_scale || candidate->map_id() != current->map_id()) return true;
+  // The path driven between the two ends, along the keyframes in between (metres in a stereo map).
+  double driven = 0.0;
+  const KeyFrame* previous = nullptr;
+  for (std::uint64_t id = std::min(candidate->id(), current->id()); id <= std::max(candidate->id(), current->id());
+       ++id) {
+    const KeyFrame* kf = map_.KeyFrameById(id);
+    if (kf == nullptr || kf->is_bad() || kf->map_id() != current->map_id()) continue;
+    if (previous != nullptr) driven += (kf->center() - previous->center()).norm();
+    previous = kf;
+  }
+  const Eigen::Vector3d corrected_center = current_from_world_.Inverse() * Eigen::Vector3d::Zero();
+  const double jump = (corrected_center - current->center()).norm();
+  const double limit = options_.max_stereo_correction_ratio * driven + options_.stereo_correction_slack_m;
+  if (jump <= limit) return true;
+  spdlog::info("loop candidate: keyframe {} with keyframe {} refused: it would move the keyframe {:.1f} m after "
+               "{:.1f} m driven (limit {:.1f} m); a place that only looks the same",
+               current->id(), candidate->id(), jump, driven, limit);
   return false;
 }
 

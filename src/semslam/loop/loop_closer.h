@@ -39,6 +39,12 @@ struct LoopCloserOptions {
   // one view, not with the views around it.
   int min_verified_neighbours = 2;
   int verification_matches = 20;
+  // Stereo only (a metric map, whose odometry drifts by a fraction of a percent): a loop within one map may
+  // move the current keyframe by at most this share of the path driven since the matched keyframe, plus
+  // stereo_correction_slack_m. A larger jump means a place that looks the same elsewhere (towns repeat).
+  // A monocular map's scale drifts too much for such a bound, and maps to merge share no odometry.
+  double max_stereo_correction_ratio = 0.1;
+  double stereo_correction_slack_m = 3.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
   int global_ba_iterations = 10;
@@ -85,6 +91,7 @@ class LoopCloser {
   bool ComputeSim3(KeyFrame* current);
   // How many of the current keyframe's best covisibles find loop_points_ where current_from_world_ puts them.
   int CountVerifiedNeighbours(const KeyFrame* current) const;
+  bool CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const;
   // Moves the current keyframe's map into the matched keyframe's frame (write lock held); returns the
   // event's scale.
   double MoveMapToMatchedFrame(KeyFrame* current);

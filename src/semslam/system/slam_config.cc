@@ -88,6 +88,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_projected_matches", Bind(&o->loop.min_projected_matches)},
       {"min_verified_neighbours", Bind(&o->loop.min_verified_neighbours)},
       {"verification_matches", Bind(&o->loop.verification_matches)},
+      {"max_stereo_correction_ratio", Bind(&o->loop.max_stereo_correction_ratio)},
+      {"stereo_correction_slack_m", Bind(&o->loop.stereo_correction_slack_m)},
       {"merge_maps", Bind(&o->loop.merge_maps)},
       {"global_ba", Bind(&o->loop.global_ba)},
       {"global_ba_iterations", Bind(&o->loop.global_ba_iterations)},
