@@ -15,7 +15,8 @@ namespace semslam {
 namespace {
 
 bool IsSettingKey(std::string_view key) {
-  static const char* const kKeys[] = {"alpha", "ids", "seed", "blobs", "blob_size", "threads", "resize"};
+  static const char* const kKeys[] = {"alpha",     "ids",     "seed",   "blobs",
+                                      "blob_size", "threads", "resize", "width"};
   for (const char* k : kKeys) {
     if (key == k) return true;
   }
@@ -95,6 +96,23 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     }
     return std::make_unique<DnnSegmenter>(std::move(card), options);
   }
+  if (p.kind == "espnetv2" || p.kind == "sinet") {
+    allow({"threads", "width"});
+    need_argument(p.kind == "sinet" ? "the state dict (sinet:FILE.pth)"
+                                    : "the state dict (espnetv2:FILE.pth)");
+    DnnSegmenter::Options options;
+    if (const auto* t = setting("threads")) options.threads = static_cast<int>(ParseNumber(*t, "threads"));
+    int width = 0;
+    if (const auto* w = setting("width")) {
+      const double v = ParseNumber(*w, "width");
+      Require(v >= 64 && v <= 8192 && v == std::floor(v),
+              "segmenter spec: width must be an integer in 64..8192");
+      width = static_cast<int>(v);
+    }
+    ModelCard card = p.kind == "sinet" ? SiNetCityscapesCard(p.argument, width)
+                                       : EspNetV2CityscapesCard(p.argument, width);
+    return std::make_unique<DnnSegmenter>(std::move(card), options);
+  }
   if (p.kind == "labels") {
     allow({"alpha", "ids"});
     need_argument("a folder (labels:DIR)");
@@ -120,8 +138,10 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     if (const auto* b = setting("blob_size")) options.noise.blob_size = ParseNumber(*b, "blob_size");
     return std::make_unique<TruthNoisySegmenter>(*context.truth_label_dir, options);
   }
-  throw InvalidArgument("unknown segmenter '" + std::string(spec) +
-                        "'; expected none, enet:FILE, onnx:CARD.yaml, labels:DIR or truth-noisy:RATE");
+  throw InvalidArgument(
+      "unknown segmenter '" + std::string(spec) +
+      "'; expected none, enet:FILE, espnetv2:FILE.pth, sinet:FILE.pth, onnx:CARD.yaml, labels:DIR "
+      "or truth-noisy:RATE");
 }
 
 }  // namespace semslam
