@@ -2,8 +2,8 @@
 add_library(semslam_options INTERFACE)
 target_compile_features(semslam_options INTERFACE cxx_std_20)
 target_compile_options(semslam_options INTERFACE
-  -Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor -Wcast-align -Woverloaded-virtual
-  -Wimplicit-fallthrough -Wno-missing-field-initializers)
+  -Wall -Wextra -Wpedantic $<$<CXX_COMPILER_ID:GNU>:-Wshadow=local> -Wnon-virtual-dtor -Wcast-align
+  -Woverloaded-virtual -Wimplicit-fallthrough -Wno-missing-field-initializers)
 # Eigen's fixed-size vectorization needs aligned allocation; C++17 aligned new covers it.
 target_compile_definitions(semslam_options INTERFACE EIGEN_MPL2_ONLY)
 if(SEMSLAM_WERROR)
@@ -22,6 +22,13 @@ if(SEMSLAM_SANITIZE)
                                                    -fno-sanitize-recover=undefined)
   target_link_options(semslam_options INTERFACE -fsanitize=address,undefined)
 endif()
+if(SEMSLAM_THREAD_SANITIZER)
+  target_compile_options(semslam_options INTERFACE -fsanitize=thread -fno-omit-frame-pointer)
+  target_link_options(semslam_options INTERFACE -fsanitize=thread)
+endif()
+# The modules that read user input (and the map loader) carry libFuzzer's coverage instrumentation; the rest
+# of the library stays as fast as in the sanitizer build without it.
+set(semslam_fuzzed_modules core io geo landmarks map semantics system)
 
 # semslam_module(NAME SOURCES... DEPS...) declares one library per folder: semslam_<NAME>.
 function(semslam_module name)
@@ -31,4 +38,7 @@ function(semslam_module name)
   target_include_directories(semslam_${name} PUBLIC ${PROJECT_SOURCE_DIR}/src)
   target_link_libraries(semslam_${name} PUBLIC ${ARG_DEPS} PRIVATE semslam_options)
   set_target_properties(semslam_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  if(SEMSLAM_FUZZ AND name IN_LIST semslam_fuzzed_modules)
+    target_compile_options(semslam_${name} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
 endfunction()

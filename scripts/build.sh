@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
-# Installs the dependencies (if missing), configures and builds. Preset: $SEMSLAM_BUILD_PRESET (default release).
+# Installs the dependencies (if missing), configures and builds. Preset: $SEMSLAM_BUILD_PRESET (default release;
+# the sanitizer presets build only the CLI, the tests and the fuzz targets).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 preset="${SEMSLAM_BUILD_PRESET:-release}"
 ./scripts/install-deps.sh
-export CCACHE_DIR="${CCACHE_DIR:-$PWD/.cache/ccache}"
+# The compiler cache lives outside the clone, so that a fresh clone (CI's) starts warm; CCACHE_BASEDIR makes
+# the paths relative, so that clones in different places share it.
+export CCACHE_DIR="${CCACHE_DIR:-$HOME/.cache/ccache}"
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 cmake --preset "$preset" >/dev/null
 start=$(date +%s)
 cmake --build --preset "$preset" -j "$(nproc)"

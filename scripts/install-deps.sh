@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config ccache git
+  clang-14 libclang-rt-14-dev
   libopencv-dev
   libeigen3-dev
   libceres-dev
@@ -18,6 +19,7 @@ packages=(
   libboost-graph-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libosmium2-dev zlib1g-dev libexpat1-dev libbz2-dev
+  python3-dev python3-numpy pybind11-dev
 )
 
 missing=()

@@ -2,10 +2,13 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
+#include "semslam/core/log_file.h"
 #include "semslam/system/demo.h"
 
 namespace semslam::cli {
@@ -31,7 +34,10 @@ void Run(const DemoArgs& args) {
   options.mode = args.mode;
   options.pacing = ParsePacing(args.pacing).value();  // CLI11 checked the name
   options.segmenter = args.segmenter;
-  options.show_progress = !args.quiet;
+  options.show_progress = !args.quiet && !Quiet();
+  options.provenance = Provenance();
+  std::filesystem::create_directories(options.output);
+  const LogFile log(options.output / "demo.log", LogHeader());
   const DemoSummary s = RunDemo(options);
   std::printf("demo written to %s (%.0f s)\n", args.out.c_str(), s.seconds);
   std::printf("  trajectory ATE %.3f m over %.0f m (%.3f %%)\n", s.ate_rmse, s.path_length_m,
@@ -69,7 +75,7 @@ void AddDemoCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--segmenter", args->segmenter, "Keyframe segmentation (see semslam run --help)")
       ->capture_default_str();
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Run(*args); });
 }
 

@@ -1,14 +1,16 @@
-// semslam eval --estimate F --truth F [--align sim3|se3|none] [--times FILE] [--max-dt S]: one JSON object on
+// semslam eval --estimate F --truth F [--align sim3|se3|none] [--times FILE] [--frames A:B] [--max-dt S]: one JSON object on
 // stdout.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
 #include "commands.h"
 #include "semslam/eval/trajectory_metrics.h"
+#include "semslam/system/sequence_runner.h"
 
 namespace semslam::cli {
 namespace {
@@ -18,6 +20,7 @@ struct EvalArgs {
   std::string truth;
   std::string align = "sim3";
   std::string times;
+  std::string frames;
   double max_dt = 0.02;
 };
 
@@ -75,6 +78,8 @@ void AddEvalCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--times", args->times,
                   "Timestamps for KITTI-format files (a times.txt; may list more stamps than poses)");
+  cmd->add_option("--frames", args->frames,
+                  "Frames A:B that KITTI-format files cover (a run's --frames; line i is frame A+i)");
   cmd->add_option("--max-dt", args->max_dt, "Largest timestamp difference of a matched pair, seconds")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -85,7 +90,14 @@ void AddEvalCommand(CLI::App& app) {
     options.rpe_distance_m = 100.0;  // the rpe_100m_* fields
     const std::optional<std::filesystem::path> times =
         args->times.empty() ? std::nullopt : std::optional<std::filesystem::path>(args->times);
-    const TrajectoryEvaluation result = EvaluateTrajectoryFiles(args->estimate, args->truth, times, options);
+    FrameRange frames;
+    if (!args->frames.empty()) {
+      size_t end = 0;
+      ParseFrameRange(args->frames, &frames.first, &end);
+      if (end != std::numeric_limits<size_t>::max()) frames.end = end;
+    }
+    const TrajectoryEvaluation result =
+        EvaluateTrajectoryFiles(args->estimate, args->truth, times, options, frames);
     const std::string text = ToJson(result, options).dump(2);
     std::fprintf(stdout, "%s\n", text.c_str());
   });

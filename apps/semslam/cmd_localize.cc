@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/system/localizer.h"
 #include "semslam/system/sequence_runner.h"
@@ -22,8 +23,10 @@ struct LocalizeArgs {
   std::string frames;
   std::string config;
   std::string vocabulary;
-  size_t landmarks = 3;
+  size_t landmarks = 3;  // --nearest-landmarks (a count; `run --landmarks` is a file)
   bool quiet = false;
+  bool overwrite = false;
+  size_t max_bad_frames = 10;
 };
 
 void Run(const LocalizeArgs& args) {
@@ -37,7 +40,9 @@ void Run(const LocalizeArgs& args) {
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.max_landmarks = args.landmarks;
-  options.show_progress = !args.quiet;
+  options.show_progress = !args.quiet && !Quiet();
+  options.overwrite = args.overwrite;
+  options.max_bad_frames_in_row = args.max_bad_frames;
   const LocalizeSummary summary = LocalizeSequence(options);
   std::printf("%zu of %zu frames localized", summary.localized, summary.frames);
   if (summary.within_1m >= 0) std::printf(", %.1f %% within 1 m", 100.0 * summary.within_1m);
@@ -57,16 +62,25 @@ void AddLocalizeCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--sequence", args->sequence, "Sequence to localize (any folder semslam run reads)")
       ->required();
-  cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  cmd->add_option("--out", args->out,
+                  "Output folder (created if missing). A folder holding an earlier run is refused unless "
+                  "--overwrite is given; two commands never write into one folder at once")
+      ->required();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace the earlier run in --out: everything in that folder is removed before the first frame");
+  cmd->add_option("--max-bad-frames", args->max_bad_frames,
+                  "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
+                  "the command, which still saves what it did")
+      ->capture_default_str();
   cmd->add_option("--mode", args->mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "stereo"}))
       ->capture_default_str();
   cmd->add_option("--frames", args->frames, "Frames A:B (A..B-1)");
   cmd->add_option("--config", args->config, "YAML file of SLAM options")->check(CLI::ExistingFile);
   cmd->add_option("--vocabulary", args->vocabulary, "Bag-of-words vocabulary")->check(CLI::ExistingFile);
-  cmd->add_option("--landmarks", args->landmarks, "Nearest landmarks reported per frame")
+  cmd->add_option("--nearest-landmarks", args->landmarks, "Nearest landmarks reported per frame")
       ->capture_default_str();
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Run(*args); });
 }
 

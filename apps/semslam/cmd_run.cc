@@ -1,13 +1,15 @@
 // semslam run: SLAM (and, as they are enabled, semantics, GPS and landmarks) over one sequence; every output
-// goes to --out.
+// goes to --out, the log too (run.log).
 
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/system/sequence_runner.h"
 #include "semslam/system/slam_config.h"
@@ -30,9 +32,12 @@ struct RunArgs {
   std::string gps;
   std::string landmarks;
   bool no_gps_fusion = false;
+  int gps_every = 30;
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
+  bool overwrite = false;
+  size_t max_bad_frames = 10;
 };
 
 void Run(const RunArgs& args) {
@@ -50,10 +55,14 @@ void Run(const RunArgs& args) {
   options.gps = args.gps;
   options.landmarks = args.landmarks;
   options.gps_fusion = !args.no_gps_fusion;
+  options.gps_every = args.gps_every;
   options.seed = args.seed;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.map_in = args.map_in;
-  options.show_progress = !args.quiet;
+  options.show_progress = !args.quiet && !Quiet();
+  options.provenance = Provenance();
+  options.overwrite = args.overwrite;
+  options.max_bad_frames_in_row = args.max_bad_frames;
   RunSequence(options);
 }
 
@@ -67,7 +76,16 @@ void AddRunCommand(CLI::App& app) {
          "KITTI odometry sequence folder, KITTI raw drive, synthetic city output, or image folder with "
          "camera.yaml")
       ->required();
-  cmd->add_option("--out", args->out, "Output folder (created if missing)")->required();
+  cmd->add_option("--out", args->out,
+                  "Output folder (created if missing). A folder holding an earlier run is refused unless "
+                  "--overwrite is given; two commands never write into one folder at once")
+      ->required();
+  cmd->add_flag("--overwrite", args->overwrite,
+                "Replace the earlier run in --out: everything in that folder is removed before the first frame");
+  cmd->add_option("--max-bad-frames", args->max_bad_frames,
+                  "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
+                  "the command, which still saves what it did")
+      ->capture_default_str();
   cmd->add_option("--mode", args->mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "stereo"}))
       ->capture_default_str();
@@ -90,6 +108,10 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option("--landmarks", args->landmarks,
                   "Landmark catalogue: CSV (name,lat,lon[,alt,category]), GeoJSON or .osm/.osm.pbf")
       ->check(CLI::ExistingFile);
+  cmd->add_option("--gps-every", args->gps_every,
+                  "Use one GPS fix every N frames to tie the map to the world (the paper: 30)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_flag(
       "--no-gps-fusion", args->no_gps_fusion,
       "Tie the map to GPS with one robust similarity (the paper's method) instead of the pose-graph fusion");
@@ -105,7 +127,7 @@ void AddRunCommand(CLI::App& app) {
                   "Bag-of-words vocabulary (default: data/vocabulary/semslam.voc)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--no-loop-closing", args->no_loop_closing, "Disable loop closing");
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Run(*args); });
 }
 

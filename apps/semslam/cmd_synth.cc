@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/core/error.h"
 #include "semslam/sim/dataset_writer.h"
@@ -61,7 +62,7 @@ void Synth(const SynthArgs& a) {
       o.city.seed, o.city.blocks_x * o.city.blocks_y, city.num_frames(), city.route().length,
       city.route().turns.size(), city.Revisits().size(), city.Landmarks().size(), a.out);
   sim::DatasetOptions d;
-  d.progress = !a.quiet;
+  d.progress = !a.quiet && !Quiet();
   sim::WriteDataset(city, a.out, d);
 }
 
@@ -91,7 +92,7 @@ void AddSynthCommand(CLI::App& app) {
   cmd->add_option("--origin-alt", args->alt, "Altitude of the town origin, metres (default 115)");
   cmd->add_option("--start-epoch", args->start_epoch,
                   "Unix time of frame 0 for the oxts timestamps (default 1600000000)");
-  cmd->add_flag("-q,--quiet", args->quiet, "No progress lines");
+  cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Synth(*args); });
 }
 

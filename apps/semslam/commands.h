@@ -14,6 +14,7 @@ void AddRunCommand(CLI::App& app);
 void AddLocalizeCommand(CLI::App& app);
 void AddRouteCommand(CLI::App& app);
 void AddEvalCommand(CLI::App& app);
+void AddReportCommand(CLI::App& app);
 void AddVocabCommand(CLI::App& app);
 void AddSegmentCommand(CLI::App& app);
 void AddBenchCommand(CLI::App& app);

@@ -1,42 +1,70 @@
 // semslam: visual semantic SLAM with landmarks. See README.md and `semslam <command> --help`.
 
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 
 int main(int argc, char** argv) {
+  namespace cli = semslam::cli;
+  cli::SetCommandLine(argc, argv);
+  // Logs go to stderr (stdout carries results: eval's JSON, routes), and to run.log in a run folder.
+  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  auto logger = std::make_shared<spdlog::logger>("semslam", console);
+  logger->set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  spdlog::set_default_logger(logger);
+
   CLI::App app{"semslam: visual semantic SLAM with landmarks for large-scale outdoor driving"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "semslam 0.1.0");
-  bool verbose = false;
+  app.set_version_flag("--version", cli::VersionLine());
+  bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "Log debug messages");
-  app.parse_complete_callback(
-      [&] { spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::info); });
-  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  app.add_flag("-q,--quiet", quiet, "Only errors on stderr (no log messages, no progress lines)");
 
-  semslam::cli::AddDemoCommand(app);
-  semslam::cli::AddSynthCommand(app);
-  semslam::cli::AddRunCommand(app);
-  semslam::cli::AddLocalizeCommand(app);
-  semslam::cli::AddRouteCommand(app);
-  semslam::cli::AddEvalCommand(app);
-  semslam::cli::AddVocabCommand(app);
-  semslam::cli::AddSegmentCommand(app);
-  semslam::cli::AddBenchCommand(app);
+  cli::AddDemoCommand(app);
+  cli::AddSynthCommand(app);
+  cli::AddRunCommand(app);
+  cli::AddLocalizeCommand(app);
+  cli::AddRouteCommand(app);
+  cli::AddEvalCommand(app);
+  cli::AddReportCommand(app);
+  cli::AddVocabCommand(app);
+  cli::AddSegmentCommand(app);
+  cli::AddBenchCommand(app);
 
+  app.parse_complete_callback([&] {
+    // -q also counts after the subcommand (every subcommand has one).
+    for (const CLI::App* sub : app.get_subcommands()) {
+      if (const CLI::Option* q = sub->get_option_no_throw("--quiet"); q != nullptr && q->count() > 0) quiet = true;
+    }
+    cli::SetQuiet(quiet);
+    logger->set_level(verbose ? spdlog::level::debug : spdlog::level::info);
+    console->set_level(quiet ? spdlog::level::err : spdlog::level::trace);
+  });
+
+  // Ctrl-C / SIGTERM: long commands finish the current frame and save what they did; a second one quits.
+  semslam::InstallInterruptHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version print and succeed; a bad command line gets one line, like every other error.
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::fprintf(stderr, "semslam: bad command line: %s (see --help)\n", e.what());
+    // A typo explains the error best ("--sequence is required" is only its consequence).
+    const std::string hint = cli::SuggestCorrections(app, app.remaining(true));
+    std::fprintf(stderr, "semslam: bad command line: %s (see --help)\n", hint.empty() ? e.what() : hint.c_str());
     return 2;
+  } catch (const semslam::Interrupted& e) {
+    std::fprintf(stderr, "semslam: %s\n", e.what());
+    return e.ExitCode();
   } catch (const semslam::InputError& e) {
+    spdlog::default_logger()->flush();
     std::fprintf(stderr, "semslam: input error: %s\n", e.what());
     return 1;
   } catch (const semslam::InvalidArgument& e) {

@@ -7,6 +7,7 @@
 #include "semslam/core/error.h"
 #include "semslam/io/trajectory_io.h"
 #include "support/test_support.h"
+#include "../io/test_files.h"
 
 namespace semslam {
 namespace {
@@ -209,13 +210,21 @@ TEST(EvaluateTrajectoryFiles, FormatsTimesAndErrors) {
   WriteKittiPoses(dir / "estimate.txt", truth);
   std::vector<double> times;
   for (const auto& p : truth) times.push_back(p.timestamp);
-  times.push_back(99.0);  // more stamps than poses
   WriteTimes(dir / "times.txt", times);
 
-  const TrajectoryEvaluation e =
+  const TrajectoryEvaluation evaluation =
       EvaluateTrajectoryFiles(dir / "estimate.txt", dir / "truth.tum", dir / "times.txt");
-  EXPECT_EQ(e.matched, 30u);
-  EXPECT_LT(e.ate.rmse, 1e-6);
+  EXPECT_EQ(evaluation.matched, 30u);
+  EXPECT_LT(evaluation.ate.rmse, 1e-6);
+  // A KITTI estimate over part of the frames says which (line i is frame first + i).
+  times.push_back(99.0);
+  WriteTimes(dir / "longer_times.txt", times);
+  EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "estimate.txt", dir / "truth.tum", dir / "longer_times.txt"),
+                     "estimate.txt", "holds 30 poses", "31 stamps", "--frames");
+  EXPECT_EQ(EvaluateTrajectoryFiles(dir / "estimate.txt", dir / "truth.tum", dir / "longer_times.txt", {},
+                                    FrameRange{0, 30})
+                .matched,
+            30u);
   // KITTI against KITTI, by index.
   EXPECT_EQ(EvaluateTrajectoryFiles(dir / "estimate.txt", dir / "estimate.txt", std::nullopt).matched, 30u);
 
@@ -236,6 +245,39 @@ TEST(EvaluateTrajectoryFiles, FormatsTimesAndErrors) {
     EXPECT_NE(std::string(error.what()).find("no estimated pose matched"), std::string::npos) << error.what();
   }
   EXPECT_THROW(ComputeAte(late, truth, Alignment::kSim3), EvaluationError);
+}
+
+// evo and the KITTI devkit pair line i of a KITTI file with frame i: a file with a frame left out must be
+// refused, not silently shifted by one frame from the gap on.
+TEST(EvaluateTrajectoryFiles, KittiLineCountMustMatchTheFrames) {
+  testing::TempDir dir;
+  const Trajectory truth = WindingDrive(40);
+  WriteKittiPoses(dir / "truth.txt", truth);
+  std::vector<double> times;
+  for (const auto& p : truth) times.push_back(p.timestamp);
+  WriteTimes(dir / "times.txt", times);
+  Trajectory gap = truth;
+  gap.erase(gap.begin() + 1);  // frame 1 left out, as trajectory.kitti did for an untracked frame
+  WriteKittiPoses(dir / "gap.txt", gap);
+  EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "gap.txt", dir / "truth.txt", std::nullopt), "gap.txt",
+                     "holds 39 poses", "truth.txt has 40", "line i is frame i");
+  EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "gap.txt", dir / "truth.txt", dir / "times.txt"),
+                     "holds 39 poses");
+  // The frames of a partial run: lines 0..9 are frames 10..19 of the ground truth.
+  const Trajectory partial(truth.begin() + 10, truth.begin() + 20);
+  WriteKittiPoses(dir / "part.txt", partial);
+  EXPECT_INPUT_ERROR(EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", std::nullopt), "holds 10 poses");
+  const TrajectoryEvaluation result =
+      EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", std::nullopt, {}, FrameRange{10, 20});
+  EXPECT_EQ(result.matched, 10u);
+  EXPECT_LT(result.ate.rmse, 1e-6);
+  const TrajectoryEvaluation timed =
+      EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", dir / "times.txt", {}, FrameRange{10, 20});
+  EXPECT_EQ(timed.matched, 10u);
+  EXPECT_LT(timed.ate.rmse, 1e-6);
+  EXPECT_INPUT_ERROR(
+      EvaluateTrajectoryFiles(dir / "part.txt", dir / "truth.txt", std::nullopt, {}, FrameRange{35, 45}),
+      "truth.txt", "frames 35:45", "only 40 frames");
 }
 
 TEST(EvalOptions, Check) {

@@ -116,12 +116,12 @@ TEST(GeoOutputs, WritesEverythingForADriftingMonocularDrive) {
 
   for (const char* name :
        {"trajectory_wgs84.csv", "landmarks.geojson", "topology.geojson", "topology.graphml", "topology.dot",
-        "topology.json", "objects.json", "plots/gps.png", "plots/topology.png", "plots/semantic_map.png",
-        "plots/membership.png"}) {
+        "topology.json", "objects.json", "georeference.json", "plots/gps.png", "plots/topology.png",
+        "plots/semantic_map.png", "plots/membership.png", "plots/trajectory.png"}) {
     EXPECT_TRUE(fs::is_regular_file(out / name)) << name;
     EXPECT_GT(fs::file_size(out / name), 100u) << name;
   }
-  EXPECT_EQ(outputs.files.size(), 11u);
+  EXPECT_EQ(outputs.files.size(), 13u);
   const std::string csv = Read(out / "trajectory_wgs84.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), static_cast<long>(s.drive.frames.size()) + 1);
   EXPECT_EQ(csv.substr(0, 14), "t,lat,lon,alt\n");

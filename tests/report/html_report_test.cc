@@ -14,6 +14,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/geo/georeference.h"
 #include "semslam/io/trajectory_io.h"
 #include "semslam/report/html_encoding.h"
 #include "semslam/report/plots.h"
@@ -264,7 +265,8 @@ TEST(HtmlReport, FullRunHasEverySection) {
     EXPECT_NE(html.find("<section id=\"" + id + "\">"), std::string::npos) << id;
     EXPECT_NE(html.find("href=\"#" + id + "\""), std::string::npos) << id;
   }
-  EXPECT_NE(html.find("<title>semslam report: 00</title>"), std::string::npos);
+  // Named after the dataset folder, the sequence and the run folder ("KITTI 00" alone named two runs alike).
+  EXPECT_NE(html.find("<title>semslam: city/00, "), std::string::npos);
   // Summary figures.
   const std::string summary = Between(html, "<section id=\"summary\">", "</section>");
   EXPECT_NE(summary.find("/data/city/sequences/00"), std::string::npos);
@@ -345,11 +347,17 @@ TEST(HtmlReport, EmbeddedDataParsesAndHoldsEveryPoint) {
   ASSERT_EQ(xyz.size(), 3u * 3000u);
   ASSERT_EQ(labels.size(), 3000u);
 
-  // The same points with the same labels (in label order).
+  // The same points with the same labels (in label order), in the level display frame without a georeference:
+  // x right, y forward (the first camera's z), z up (its -y).
+  EXPECT_EQ(data.at("frame"), "level");
+  EXPECT_EQ(data.at("units"), "map units");
   std::multiset<std::tuple<float, float, float, int>> expected, got;
+  const Sim3d level = LevelFromCameraWorld();
   for (const SemanticPoint& p : MapPoints(3000)) {
-    expected.insert({static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
-                     static_cast<float>(p.position.z()), p.label});
+    const Eigen::Vector3d q = level * p.position;
+    EXPECT_NEAR(q.y(), p.position.z(), 1e-12);
+    EXPECT_NEAR(q.z(), -p.position.y(), 1e-12);
+    expected.insert({static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z()), p.label});
   }
   for (size_t i = 0; i < labels.size(); ++i) {
     got.insert({xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], static_cast<unsigned char>(labels[i])});
@@ -370,14 +378,16 @@ TEST(HtmlReport, EmbeddedDataParsesAndHoldsEveryPoint) {
   EXPECT_EQ(next, 3000u);
   EXPECT_EQ(seen, (std::set<int>{0, 2, 13, kNoLabel}));
 
-  // The legend's classes: 19 and "unlabeled", counts matching the map.
+  // The legend's classes: only those present (road, sidewalk, car) and "other", counts matching the map.
   const json& classes = data.at("classes");
-  ASSERT_EQ(classes.size(), static_cast<size_t>(kNumClasses + 1));
+  ASSERT_EQ(classes.size(), 4u);
   std::uint64_t total = 0;
   for (const json& c : classes) total += c.at("map_count").get<std::uint64_t>();
   EXPECT_EQ(total, 3000u);
-  EXPECT_EQ(classes.at(13).at("name"), "car");
-  EXPECT_EQ(classes.at(13).at("color"), json({0, 0, 142}));
+  const auto car = std::find_if(classes.begin(), classes.end(), [](const json& c) { return c.at("id") == 13; });
+  ASSERT_NE(car, classes.end());
+  EXPECT_EQ(car->at("name"), "car");
+  EXPECT_EQ(car->at("color"), json({0, 0, 142}));
   EXPECT_EQ(classes.back().at("id").get<int>(), kNoLabel);
   EXPECT_EQ(classes.back().at("map_count").get<int>(), 60);
 
@@ -386,7 +396,7 @@ TEST(HtmlReport, EmbeddedDataParsesAndHoldsEveryPoint) {
   const std::vector<float> trajectory =
       DecodeFloats(data.at("trajectory").at("positions_b64").get<std::string>());
   ASSERT_EQ(trajectory.size(), 150u);
-  EXPECT_FLOAT_EQ(trajectory[3 * 49 + 2], 24.5f);
+  EXPECT_FLOAT_EQ(trajectory[3 * 49 + 1], 24.5f);  // forward is up the screen
   EXPECT_EQ(data.at("keyframes").at("count").get<int>(), 10);
   ASSERT_EQ(data.at("landmarks").size(), 2u);
   EXPECT_EQ(data.at("landmarks").at(1).at("name").get<std::string>(), kTrickyName);
@@ -412,8 +422,8 @@ TEST(HtmlReport, SubsamplesToMaxPointsReproducibly) {
   // A subset of the map without repeats, from all over it (not just its first points).
   std::set<std::tuple<float, float, float>> all, chosen;
   for (const SemanticPoint& p : MapPoints(5000)) {
-    all.insert({static_cast<float>(p.position.x()), static_cast<float>(p.position.y()),
-                static_cast<float>(p.position.z())});
+    const Eigen::Vector3d q = LevelFromCameraWorld() * p.position;  // the display frame
+    all.insert({static_cast<float>(q.x()), static_cast<float>(q.y()), static_cast<float>(q.z())});
   }
   float max_x = 0;
   for (size_t i = 0; i < 1200; ++i) {
@@ -436,8 +446,8 @@ TEST(HtmlReport, SubsamplesToMaxPointsReproducibly) {
   const std::vector<float> trajectory =
       DecodeFloats(data.at("trajectory").at("positions_b64").get<std::string>());
   ASSERT_EQ(trajectory.size(), 30u);
-  EXPECT_FLOAT_EQ(trajectory[2], 0.0f);
-  EXPECT_FLOAT_EQ(trajectory[29], 49.5f);
+  EXPECT_FLOAT_EQ(trajectory[1], 0.0f);
+  EXPECT_FLOAT_EQ(trajectory[28], 49.5f);
 
   // Same options, same bytes; another seed, another subset.
   WriteHtmlReport(dir.path(), options);
@@ -454,6 +464,33 @@ TEST(HtmlReport, SubsamplesToMaxPointsReproducibly) {
   const json empty = EmbeddedData(ReadText(result.path));
   EXPECT_EQ(empty.at("points").at("count").get<int>(), 0);
   EXPECT_EQ(empty.at("trajectory").at("count").get<int>(), 10);
+}
+
+// With georeference.json the view is ENU (north up, metres); keyframes are thinned to max_keyframes.
+TEST(HtmlReport, GeoreferencedViewIsEnuAndKeyframesAreThinned) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 100, 2000);
+  // enu = 2 * map + t (no rotation).
+  const json georeference = {
+      {"origin", {{"lat", 49.0}, {"lon", 8.4}, {"alt", 100.0}}},
+      {"enu_from_map", {{"scale", 2.0}, {"rotation_wxyz", {1.0, 0.0, 0.0, 0.0}}, {"translation", {10.0, 20.0, 30.0}}}},
+      {"local", json::array()}};
+  std::ofstream(dir.path() / "georeference.json") << georeference.dump();
+  HtmlReportOptions options;
+  options.max_keyframes = 50;
+  const HtmlReportResult result = WriteHtmlReport(dir.path(), options);
+  EXPECT_EQ(result.keyframes_shown, 50u);
+  const json data = EmbeddedData(ReadText(result.path));
+  EXPECT_EQ(data.at("frame"), "enu");
+  EXPECT_EQ(data.at("units"), "m");
+  EXPECT_EQ(data.at("keyframes").at("count").get<int>(), 50);
+  EXPECT_EQ(data.at("keyframes").at("total").get<int>(), 400);
+  const std::vector<float> trajectory = DecodeFloats(data.at("trajectory").at("positions_b64").get<std::string>());
+  ASSERT_GE(trajectory.size(), 6u);
+  // Pose 1 is at map (0, 0, 0.5): 2 * (0, 0, 0.5) + t.
+  EXPECT_FLOAT_EQ(trajectory[3], 10.0f);
+  EXPECT_FLOAT_EQ(trajectory[4], 20.0f);
+  EXPECT_FLOAT_EQ(trajectory[5], 31.0f);
 }
 
 TEST(HtmlReport, MissingOptionalInputsLeaveTheirSectionsOut) {

@@ -1,4 +1,5 @@
 #include "semslam/report/plots.h"
+#include "semslam/report/plot_drawing.h"
 
 #include <gtest/gtest.h>
 
@@ -106,8 +107,87 @@ TEST(Plots, SemanticMapInThePalette) {
   EXPECT_EQ(image.at<cv::Vec3b>(view.ToPixel({25, 10})), cv::Vec3b(car.b, car.g, car.r));
   EXPECT_EQ(image.at<cv::Vec3b>(view.ToPixel({20, 30})), cv::Vec3b(building.b, building.g, building.r));
   EXPECT_EQ(image.at<cv::Vec3b>(view.ToPixel({10, 10})), cv::Vec3b(255, 255, 255));  // sky skipped
-  EXPECT_EQ(image.at<cv::Vec3b>(view.ToPixel({40, 10})), cv::Vec3b(180, 180, 180));  // unlabelled
+  const Rgb other = ClassDisplay{}.other;
+  EXPECT_EQ(image.at<cv::Vec3b>(view.ToPixel({40, 10})), cv::Vec3b(other.b, other.g, other.r));  // unlabelled
   EXPECT_THROW(RenderSemanticMapPlot(points, {}, trajectory), InvalidArgument);
+}
+
+// Present classes keep the Cityscapes palette unless two look alike: then the rarer one gets a distinct colour.
+TEST(ClassColors, PresentClassesAreDistinct) {
+  std::array<long long, kNumClasses> counts{};
+  const int car = TrainId(SemanticClass::kCar), bus = TrainId(SemanticClass::kBus),
+            train = TrainId(SemanticClass::kTrain), road = TrainId(SemanticClass::kRoad),
+            pole = TrainId(SemanticClass::kPole);
+  counts[static_cast<size_t>(road)] = 5000;
+  counts[static_cast<size_t>(car)] = 900;
+  counts[static_cast<size_t>(bus)] = 300;
+  counts[static_cast<size_t>(train)] = 200;
+  counts[static_cast<size_t>(pole)] = 100;
+  counts[static_cast<size_t>(TrainId(SemanticClass::kTruck))] = 3;  // under 0.5 %: "other"
+  const ClassDisplay display = MakeClassDisplay(counts);
+  EXPECT_TRUE(display.listed[static_cast<size_t>(train)]);
+  EXPECT_FALSE(display.listed[static_cast<size_t>(TrainId(SemanticClass::kTruck))]);
+  EXPECT_FALSE(display.listed[static_cast<size_t>(TrainId(SemanticClass::kSidewalk))]);  // absent
+  EXPECT_EQ(display.color[static_cast<size_t>(road)], ClassColor(road));
+  EXPECT_EQ(display.color[static_cast<size_t>(bus)], ClassColor(bus));  // the commoner keeps its colour
+  EXPECT_LT(DeltaE(ClassColor(bus), ClassColor(train)), 20.0);          // Cityscapes: near-identical blues
+  EXPECT_NE(display.color[static_cast<size_t>(train)], ClassColor(train));
+  EXPECT_LT(DeltaE(ClassColor(pole), display.other), 20.0);  // pole grey is the "other" grey
+  EXPECT_NE(display.color[static_cast<size_t>(pole)], ClassColor(pole));
+  std::vector<Rgb> listed;
+  for (int c = 0; c < kNumClasses; ++c) {
+    if (display.listed[static_cast<size_t>(c)]) listed.push_back(display.color[static_cast<size_t>(c)]);
+  }
+  ASSERT_EQ(listed.size(), 5u);
+  for (size_t i = 0; i < listed.size(); ++i) {
+    EXPECT_GE(DeltaE(listed[i], display.other), 20.0) << i;
+    for (size_t j = i + 1; j < listed.size(); ++j) EXPECT_GE(DeltaE(listed[i], listed[j]), 20.0) << i << " " << j;
+  }
+}
+
+// Labels placed by LabelPlacer never overlap, even for landmarks at one spot.
+TEST(Plots, LabelsDoNotOverlap) {
+  cv::Mat image(400, 600, CV_8UC3, cv::Scalar(255, 255, 255));
+  plot::LabelPlacer placer(image.size());
+  placer.ReserveAround(cv::Point(300, 200), 7);  // the node's marker
+  std::vector<cv::Rect> boxes;
+  for (const char* name : {"Opera House", "Guild Hall", "Town Hall", "Central Library", "Observatory"}) {
+    const cv::Rect box = placer.Place(image, name, cv::Point(300, 200));
+    EXPECT_GT(box.area(), 0) << name;
+    EXPECT_EQ((box & cv::Rect(293, 193, 15, 15)).area(), 0) << name << " covers the marker";
+    for (const cv::Rect& other : boxes) EXPECT_EQ((box & other).area(), 0) << name;
+    boxes.push_back(box);
+  }
+}
+
+TEST(Plots, ErrorPlotAndTrajectoryPlotWithoutNorth) {
+  ErrorPlotInput errors;
+  for (int i = 0; i < 100; ++i) {
+    errors.distance_m.push_back(i);
+    errors.error.push_back(0.1 + 0.05 * std::sin(0.1 * i));
+  }
+  const cv::Mat chart = RenderErrorPlot(errors);
+  EXPECT_GT(NonWhite(chart), 2000);
+  errors.error.pop_back();
+  EXPECT_THROW(RenderErrorPlot(errors), InvalidArgument);
+
+  TrajectoryPlotInput input;
+  input.estimate = Loop();
+  PlotOptions options;
+  options.north_up = false;
+  options.metres = false;
+  const cv::Mat plain = RenderTrajectoryPlot(input, options);
+  options.north_up = true;
+  const cv::Mat north = RenderTrajectoryPlot(input, options);
+  ASSERT_EQ(plain.size(), north.size());
+  // The north arrow is the only difference, at the top left.
+  cv::Mat diff;
+  cv::absdiff(plain, north, diff);
+  cv::cvtColor(diff, diff, cv::COLOR_BGR2GRAY);
+  const cv::Rect changed = cv::boundingRect(diff);
+  EXPECT_GT(changed.area(), 0);
+  EXPECT_LT(changed.x + changed.width, 80);
+  EXPECT_LT(changed.y + changed.height, 90);
 }
 
 TEST(Plots, TopologyNodesAndMembershipField) {

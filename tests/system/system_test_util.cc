@@ -28,6 +28,15 @@ std::vector<std::string> Lines(const std::string& text) {
   return lines;
 }
 
+std::vector<std::string> ErrorLines(const std::string& err) {
+  std::vector<std::string> lines;
+  for (std::string& line : Lines(err)) {
+    const bool log_line = line.find("] [info] ") != std::string::npos || line.find("] [warning] ") != std::string::npos;
+    if (!log_line) lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
 bool SameBytes(const fs::path& a, const fs::path& b) {
   std::error_code ec_a, ec_b;
   if (fs::file_size(a, ec_a) != fs::file_size(b, ec_b) || ec_a || ec_b) return false;

@@ -30,6 +30,8 @@ using testing::RunSemslam;
 nlohmann::json ReadJson(const fs::path& path);
 // The lines of a text (a last line without '\n' counts; an empty text has none).
 std::vector<std::string> Lines(const std::string& text);
+// The lines of a run's stderr that report an error: all but its info and warning log lines.
+std::vector<std::string> ErrorLines(const std::string& err);
 bool SameBytes(const fs::path& a, const fs::path& b);
 
 // A shared, cached result: `dir` when it was made, else `error` says why not.

@@ -61,7 +61,7 @@ class BinaryReader {
     const auto n = Get<std::uint64_t>();
     if (n > max_count || n > (bytes_.size() - offset_) / std::max<size_t>(sizeof(T), 1)) Fail("bad element count");
     std::vector<T> values(n);
-    std::memcpy(values.data(), bytes_.data() + offset_, n * sizeof(T));
+    if (n > 0) std::memcpy(values.data(), bytes_.data() + offset_, n * sizeof(T));  // data() is null when empty
     offset_ += n * sizeof(T);
     return values;
   }
@@ -74,6 +74,7 @@ class BinaryReader {
   }
   bool AtEnd() const { return offset_ == bytes_.size(); }
   size_t offset() const { return offset_; }
+  const std::filesystem::path& file() const { return file_; }
   [[noreturn]] void Fail(std::string_view message) const;
 
  private:

@@ -61,6 +61,8 @@ class ScopedTimer {
 
 // Peak resident set size of this process in MiB (from /proc/self/status), 0 if unknown.
 double PeakRssMiB();
+// Resident set size of this process now, in MiB (from /proc/self/statm), 0 if unknown. Cheap enough per frame.
+double CurrentRssMiB();
 // Hands memory the allocator keeps after large temporary work (a global bundle adjustment) back to the system,
 // so that the process does not stay at its peak. A no-op where the C library has no way to do it.
 void ReleaseFreeMemory();

@@ -317,10 +317,46 @@ AteResult ComputeAte(const Trajectory& estimate, const Trajectory& truth, Alignm
   return AteOfMatched(m, alignment);
 }
 
+ErrorSeries ComputeErrorSeries(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
+                               double max_dt) {
+  Require(std::isfinite(max_dt) && max_dt >= 0, "ComputeErrorSeries: max_dt must be >= 0");
+  Matched m = MatchPoses(estimate, truth, max_dt);
+  ErrorSeries series;
+  series.ate = AteOfMatched(m, alignment);  // aligns m.estimate in place
+  series.distance_m = Distances(m.truth);
+  series.rpe_trans_m.assign(m.estimate.size(), 0.0);
+  for (size_t i = 1; i < m.estimate.size(); ++i) {
+    series.rpe_trans_m[i] = RelativeError(m.estimate, m.truth, i - 1, i).translation.norm();
+  }
+  if (m.estimate.size() >= 2) series.rpe = ComputeConsecutiveRpe(m.estimate, m.truth);
+  series.aligned = std::move(m.estimate);
+  series.truth = std::move(m.truth);
+  return series;
+}
+
+namespace {
+
+std::string RangeText(size_t first, size_t end) { return fmt::format("frames {}:{}", first, end); }
+
+// KITTI poses stamped by frame: times[first + i] (or first + i without times) for line i.
+Trajectory StampKittiPoses(const std::vector<Rigid3d>& poses, size_t first,
+                           const std::optional<std::vector<double>>& times) {
+  Trajectory trajectory;
+  trajectory.reserve(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    trajectory.push_back({times ? (*times)[first + i] : static_cast<double>(first + i), poses[i]});
+  }
+  return trajectory;
+}
+
+}  // namespace
+
 TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs::path& truth,
-                                             const std::optional<fs::path>& times,
-                                             const EvalOptions& options) {
+                                             const std::optional<fs::path>& times, const EvalOptions& options,
+                                             const FrameRange& frames) {
   options.Check();
+  Require(!frames.end || frames.first < *frames.end,
+          fmt::format("frames {}:{}: the range is empty", frames.first, frames.end.value_or(0)));
   const TrajectoryFormat estimate_format = DetectTrajectoryFormat(estimate);
   const TrajectoryFormat truth_format = DetectTrajectoryFormat(truth);
   if (estimate_format != truth_format && !times) {
@@ -331,8 +367,58 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
                            "match them against the TUM file {}",
                            tum.string()));
   }
-  const Trajectory estimate_trajectory = ReadTrajectory(estimate, times);
-  const Trajectory truth_trajectory = ReadTrajectory(truth, times);
+  std::optional<std::vector<double>> stamps;
+  if (times) stamps = ReadTimes(*times);
+
+  // The frames the KITTI files cover: [first, end), end from the ground truth (KITTI) or the times.
+  const size_t first = frames.first;
+  std::optional<size_t> available;  // frames known: ground-truth lines (KITTI) and stamps
+  if (truth_format == TrajectoryFormat::kKitti) available = CountKittiPoses(truth);
+  if (stamps) available = std::min(available.value_or(stamps->size()), stamps->size());
+  const bool uses_frames =
+      estimate_format == TrajectoryFormat::kKitti || truth_format == TrajectoryFormat::kKitti;
+  size_t end = frames.end.value_or(available.value_or(0));
+  if (uses_frames && available && end > *available) {
+    const fs::path& source = truth_format == TrajectoryFormat::kKitti ? truth : *times;
+    throw InputError(source, fmt::format("{} asked, but it covers only {} frames", RangeText(first, end),
+                                         *available));
+  }
+
+  Trajectory truth_trajectory;
+  if (truth_format == TrajectoryFormat::kKitti) {
+    std::vector<Rigid3d> poses = ReadKittiPoses(truth);
+    if (first >= end) {
+      throw InputError(truth, fmt::format("holds {} poses: none in {}", poses.size(), RangeText(first, end)));
+    }
+    poses = std::vector<Rigid3d>(poses.begin() + static_cast<std::ptrdiff_t>(first),
+                                 poses.begin() + static_cast<std::ptrdiff_t>(end));
+    truth_trajectory = StampKittiPoses(poses, first, stamps);
+  } else {
+    truth_trajectory = ReadTumTrajectory(truth);
+  }
+
+  Trajectory estimate_trajectory;
+  if (estimate_format == TrajectoryFormat::kKitti) {
+    const std::vector<Rigid3d> poses = ReadKittiPoses(estimate);
+    const size_t expected = end > first ? end - first : 0;
+    if (poses.size() != expected) {
+      const std::string against =
+          truth_format == TrajectoryFormat::kKitti
+              ? fmt::format("the ground truth {} has {} in {}", truth.filename().string(), expected,
+                            RangeText(first, end))
+              : fmt::format("{} lists {} stamps in {}", times->filename().string(), expected,
+                            RangeText(first, end));
+      throw InputError(
+          estimate,
+          fmt::format("holds {} poses but {}: a KITTI pose file has no timestamps (line i is frame {}), so it "
+                      "needs exactly one line per frame or every pose after a gap is paired with the wrong "
+                      "frame; give the frames the run covered (--frames A:B) or compare its TUM trajectory",
+                      poses.size(), against, first == 0 ? std::string("i") : fmt::format("{} + i", first)));
+    }
+    estimate_trajectory = StampKittiPoses(poses, first, stamps);
+  } else {
+    estimate_trajectory = ReadTumTrajectory(estimate);
+  }
   try {
     return EvaluateTrajectory(estimate_trajectory, truth_trajectory, options);
   } catch (const EvaluationError& e) {

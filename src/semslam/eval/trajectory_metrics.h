@@ -121,12 +121,36 @@ TrajectoryEvaluation EvaluateTrajectory(const Trajectory& estimate, const Trajec
 AteResult ComputeAte(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
                      double max_dt = 0.02);
 
-// Reads two trajectory files (TUM or KITTI, see io/trajectory_io.h) and evaluates them. KITTI files take
-// their timestamps from `times` when given (it may list more stamps than poses), else their line index; a TUM
-// file cannot be matched against a KITTI file without `times`. Throws InputError naming the files.
+// Per matched pose, for plots of the errors along the drive (as evo_ape / evo_rpe draw them).
+struct ErrorSeries {
+  AteResult ate;                       // errors[i]: the ATE of matched pose i
+  std::vector<Rigid3d> aligned;        // matched estimate poses, aligned to the ground truth (truth_from_estimate)
+  std::vector<Rigid3d> truth;          // matched ground-truth poses
+  std::vector<double> distance_m;      // along the matched ground truth, at pose i
+  std::vector<double> rpe_trans_m;     // |t(E)| from pose i-1 to pose i (rpe_trans_m[0] = 0, not counted)
+  RelativeErrors rpe;                  // consecutive pairs
+};
+// Throws EvaluationError when no pose matched.
+ErrorSeries ComputeErrorSeries(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
+                               double max_dt = 0.02);
+
+// The frames a KITTI pose file covers: line i is frame first + i. Only KITTI files have no timestamps of their
+// own; TUM files are matched by time whatever the range.
+struct FrameRange {
+  size_t first = 0;
+  std::optional<size_t> end;  // exclusive; default: as many frames as the ground truth (or times) has
+};
+
+// Reads two trajectory files (TUM or KITTI, see io/trajectory_io.h) and evaluates them. KITTI files take their
+// timestamps from `times` when given (line i: the stamp of frame frames.first + i), else their frame index; a
+// TUM file cannot be matched against a KITTI file without `times`. A KITTI ground truth is used over
+// `frames`. A KITTI estimate must hold exactly one pose per frame it is compared with (the ground truth's
+// frames in the range when that is a KITTI file, else the stamps of `times` in the range): a missing line
+// would pair every later pose with the wrong frame, so the files are refused with the reason. Throws
+// InputError naming the files.
 TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estimate,
                                              const std::filesystem::path& truth,
                                              const std::optional<std::filesystem::path>& times,
-                                             const EvalOptions& options = {});
+                                             const EvalOptions& options = {}, const FrameRange& frames = {});
 
 }  // namespace semslam

@@ -9,6 +9,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/yaml_file.h"
 #include "semslam/io/sequence_internal.h"
 #include "semslam/io/trajectory_io.h"
 
@@ -111,15 +112,7 @@ CameraYaml ReadCameraYaml(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "camera file not found");
   const fs::path file = fs::absolute(path).lexically_normal();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::ParserException& e) {
-    throw InputError(SourceLocation{path, e.mark.is_null() ? 0 : e.mark.line + 1},
-                     fmt::format("malformed YAML: {}", e.msg));
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, fmt::format("cannot read the YAML file: {}", e.msg));
-  }
+  const YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) {
     throw InputError(path, "expected a YAML mapping of camera keys (fx: ..., fy: ..., cx: ..., cy: ...)");
   }
@@ -230,6 +223,7 @@ std::unique_ptr<ImageSequence> OpenImageFolder(const fs::path& folder_or_yaml) {
   files.directory = io_internal::NormalizeDirectory(config.images);
   files.name = config.name.value_or(files.directory.filename().string());
   files.camera = config.camera;
+  files.calibration = config.file;
   files.left = io_internal::ListFiles(config.images, {".png", ".jpg", ".jpeg"});
   if (files.left.empty()) {
     throw InputError(at_file, "images", fmt::format("no .png/.jpg images in {}", config.images.string()));

@@ -164,6 +164,7 @@ std::unique_ptr<ImageSequence> OpenKittiOdometry(const fs::path& sequence_dir) {
   const KittiCalibration calibration = ReadKittiCalibration(dir / "calib.txt");
   files.camera = calibration.Camera0(1, 1);
   files.camera.width = files.camera.height = 0;  // set from the first image
+  files.calibration = dir / "calib.txt";
 
   const fs::path times_file = dir / "times.txt";
   const std::vector<double> times = ReadTimes(times_file);

@@ -70,6 +70,7 @@ std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir) {
   files.camera.fy = p0[5];
   files.camera.cx = p0[2];
   files.camera.cy = p0[6];
+  files.calibration = calib.file;
   files.camera.width = static_cast<int>(std::lround(size[0]));
   files.camera.height = static_cast<int>(std::lround(size[1]));
   const SourceLocation p0_at{calib.file, calib.lines.at("P_rect_00")};

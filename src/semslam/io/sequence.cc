@@ -83,8 +83,37 @@ std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files) {
   }
   files.camera.width = first.cols;
   files.camera.height = first.rows;
-  files.camera.Check();
+  CheckCameraPlausible(files.camera, files.calibration.empty() ? files.directory : files.calibration);
   return std::make_unique<FileSequence>(std::move(files));
+}
+
+void CheckCameraPlausible(const PinholeCamera& camera, const fs::path& calibration) {
+  try {
+    camera.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(calibration, e.what());
+  }
+  const double w = camera.width, h = camera.height;
+  // Field of view of 1..179 degrees across the width: f between w / (2 tan 89.5 deg) and w / (2 tan 0.5 deg).
+  constexpr double kMinFocalPerWidth = 0.0044, kMaxFocalPerWidth = 57.3;
+  for (const auto& [name, f] : {std::pair{"fx", camera.fx}, std::pair{"fy", camera.fy}}) {
+    if (f < kMinFocalPerWidth * w || f > kMaxFocalPerWidth * w) {
+      throw InputError(SourceLocation{calibration, 0}, name,
+                       fmt::format("focal length {:.6g} px is not that of a camera with {}x{} images (a field of "
+                                   "view of 1 to 179 degrees needs {:.3g}..{:.3g} px)",
+                                   f, camera.width, camera.height, kMinFocalPerWidth * w, kMaxFocalPerWidth * w));
+    }
+  }
+  if (camera.fy > 5 * camera.fx || camera.fx > 5 * camera.fy) {
+    throw InputError(SourceLocation{calibration, 0}, "fx, fy",
+                     fmt::format("fx = {:.6g} and fy = {:.6g} px differ by more than a factor 5", camera.fx,
+                                 camera.fy));
+  }
+  if (camera.cx < -0.5 * w || camera.cx > 1.5 * w || camera.cy < -0.5 * h || camera.cy > 1.5 * h) {
+    throw InputError(SourceLocation{calibration, 0}, "cx, cy",
+                     fmt::format("principal point ({:.6g}, {:.6g}) px lies far outside the {}x{} image",
+                                 camera.cx, camera.cy, camera.width, camera.height));
+  }
 }
 
 fs::path NormalizeDirectory(const fs::path& path) {

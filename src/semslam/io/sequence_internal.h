@@ -19,6 +19,7 @@ struct SequenceFiles {
   std::vector<std::filesystem::path> right;  // empty for a monocular sequence, else one per left image
   std::vector<double> timestamps;            // one per left image
   PinholeCamera camera;                      // width and height are set from the first left image
+  std::filesystem::path calibration;         // the file the camera came from (named in errors)
   std::optional<double> baseline;            // metres, for a stereo sequence
   std::optional<Trajectory> ground_truth;    // usually one pose per image (a TUM file may differ)
   std::optional<std::filesystem::path> labels;
@@ -26,8 +27,14 @@ struct SequenceFiles {
 };
 
 // Reads the first left image for the image size (and checks it against a size the calibration gave, when
-// camera.width/height are already set), checks the rest and builds the sequence.
+// camera.width/height are already set), checks the camera (CheckCameraPlausible) and the rest and builds the
+// sequence.
 std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files);
+
+// Throws InputError naming `calibration` when the intrinsics cannot be those of a real camera at this image
+// size: a field of view outside about 1..179 degrees (f = 1e-300, f = 1e9), very unequal fx and fy, or a
+// principal point far outside the image (cx = 9e4 for a 1241-pixel-wide image).
+void CheckCameraPlausible(const PinholeCamera& camera, const std::filesystem::path& calibration);
 
 // "a/b/" and "a/b/." -> "a/b", made absolute.
 std::filesystem::path NormalizeDirectory(const std::filesystem::path& path);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -116,6 +117,13 @@ std::vector<Rigid3d> ReadKittiPoses(const fs::path& path) {
   return poses;
 }
 
+size_t CountKittiPoses(const fs::path& path) {
+  TextReader reader(path);
+  size_t count = 0;
+  while (const auto line = reader.NextLine()) count += IsDataLine(*line) ? 1 : 0;
+  return count;
+}
+
 void WriteKittiPoses(const fs::path& path, const std::vector<Rigid3d>& world_from_camera) {
   std::string text;
   text.reserve(world_from_camera.size() * 12 * 20);
@@ -156,6 +164,72 @@ void WriteTimes(const fs::path& path, const std::vector<double>& timestamps) {
   text.reserve(timestamps.size() * 24);
   for (const double t : timestamps) text += fmt::format("{:.9f}\n", t);
   WriteFileAtomically(path, text);
+}
+
+void DenseTrajectoryOptions::Check() const {
+  Require(max_predicted_frames >= 0, "max_predicted_frames must not be negative");
+}
+
+size_t DenseTrajectory::Count(PoseSource what) const {
+  return static_cast<size_t>(std::count(source.begin(), source.end(), what));
+}
+
+DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t first_frame, size_t end_frame,
+                              const DenseTrajectoryOptions& options) {
+  options.Check();
+  Require(first_frame <= end_frame, fmt::format("frames {}:{}: the range ends before it starts", first_frame, end_frame));
+  for (size_t i = 1; i < estimated.size(); ++i) {
+    Require(estimated[i].frame_index > estimated[i - 1].frame_index,
+            "estimated poses must be in strictly increasing frame order");
+  }
+  const size_t n = end_frame - first_frame;
+  DenseTrajectory dense;
+  dense.first_frame = first_frame;
+  dense.world_from_camera.resize(n);
+  dense.source.assign(n, PoseSource::kNone);
+  std::vector<const IndexedPose*> in_range;
+  for (const IndexedPose& pose : estimated) {
+    if (pose.frame_index >= first_frame && pose.frame_index < end_frame) in_range.push_back(&pose);
+  }
+  if (in_range.empty()) return dense;  // identities: nothing better is known
+
+  size_t next = 0;                         // the next estimated pose in in_range
+  const IndexedPose* last = nullptr;       // the last estimated pose before frame i
+  const IndexedPose* before_last = nullptr;
+  for (size_t i = 0; i < n; ++i) {
+    const size_t frame = first_frame + i;
+    if (next < in_range.size() && in_range[next]->frame_index == frame) {
+      before_last = last;
+      last = in_range[next++];
+      dense.world_from_camera[i] = last->world_from_camera;
+      dense.source[i] = PoseSource::kEstimated;
+      continue;
+    }
+    if (last == nullptr) {
+      dense.world_from_camera[i] = in_range.front()->world_from_camera;
+      dense.source[i] = PoseSource::kFirstPose;
+      continue;
+    }
+    // The tracker's motion model: the last step's motion (camera_from_world of the last frame times
+    // world_from_camera of the one before, per frame) applied again for every frame since.
+    const size_t since = frame - last->frame_index;
+    const bool predict = before_last != nullptr && since <= static_cast<size_t>(options.max_predicted_frames);
+    const size_t steps = before_last == nullptr
+                             ? 0
+                             : std::min(since, static_cast<size_t>(options.max_predicted_frames));
+    if (steps == 0) {
+      dense.world_from_camera[i] = last->world_from_camera;
+    } else {
+      const double step_frames = static_cast<double>(last->frame_index - before_last->frame_index);
+      const Rigid3d last_from_before =
+          last->world_from_camera.Inverse() * before_last->world_from_camera;  // camera_last_from_camera_before
+      const Eigen::Vector6d per_frame = last_from_before.Log() / step_frames;
+      const Rigid3d now_from_last = Rigid3d::Exp(per_frame * static_cast<double>(steps));
+      dense.world_from_camera[i] = last->world_from_camera * now_from_last.Inverse();
+    }
+    dense.source[i] = predict ? PoseSource::kMotionModel : PoseSource::kHeld;
+  }
+  return dense;
 }
 
 TrajectoryFormat DetectTrajectoryFormat(const fs::path& path) {

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "semslam/core/text_reader.h"
+#include "semslam/core/utf8.h"
 #include "semslam/geo/csv.h"
 #include "semslam/landmarks/catalogue.h"
 
@@ -97,6 +98,7 @@ std::vector<Landmark> ReadLandmarksCsv(const fs::path& file) {
         case Column::kName:
           landmark.name = std::string(Trim(value));
           if (landmark.name.empty()) throw InputError(where, "name", "empty landmark name");
+          RequireUtf8(landmark.name, where, "name");  // names go into GeoJSON, JSON and HTML outputs
           break;
         case Column::kLat:
           landmark.position.latitude_deg = ParseDouble(value, where, "lat");
@@ -118,6 +120,7 @@ std::vector<Landmark> ReadLandmarksCsv(const fs::path& file) {
           break;
         case Column::kCategory:
           landmark.category = std::string(Trim(value));
+          RequireUtf8(landmark.category, where, "category");
           break;
         case Column::kIgnored:
           break;
@@ -138,7 +141,15 @@ std::vector<Landmark> ReadLandmarks(const fs::path& file, const OsmLandmarkOptio
   const std::string name = Lower(file.filename().string());
   if (EndsWith(name, ".csv") || EndsWith(name, ".txt")) return ReadLandmarksCsv(file);
   if (EndsWith(name, ".geojson") || EndsWith(name, ".json")) return ReadLandmarksGeoJson(file);
-  if (IsOsmCatalogue(file)) return ReadLandmarksOsm(file, osm_options);
+  if (IsOsmCatalogue(file)) {
+    std::vector<Landmark> landmarks = ReadLandmarksOsm(file, osm_options);
+    // OpenStreetMap text is UTF-8 by definition, but an extract can be damaged.
+    for (const Landmark& landmark : landmarks) {
+      RequireUtf8(landmark.name, landmark.source, "name");
+      RequireUtf8(landmark.category, landmark.source, "category");
+    }
+    return landmarks;
+  }
   throw InputError(
       file,
       "unknown landmark catalogue format (expected .csv, .geojson, .json, .osm, .osm.gz, .osm.bz2 or "

@@ -100,6 +100,8 @@ std::string StringProperty(const json& properties, std::initializer_list<const c
   return {};
 }
 
+std::vector<Landmark> LandmarksFromGeoJson(const json& root, std::string_view text, const fs::path& file);
+
 }  // namespace
 
 std::vector<Landmark> ReadLandmarksGeoJson(const fs::path& file) {
@@ -114,7 +116,19 @@ std::vector<Landmark> ReadLandmarksGeoJson(const fs::path& file) {
     root = json::parse(text);
   } catch (const json::parse_error& e) {
     throw InputError(SourceLocation{file, LineOfByte(text, e.byte)}, "json", e.what());
+  } catch (const json::exception& e) {  // a number out of range (1e309), ...
+    throw InputError(SourceLocation{file, 0}, "json", e.what());
   }
+  try {
+    return LandmarksFromGeoJson(root, text, file);
+  } catch (const json::exception& e) {  // a value of an unexpected type
+    throw InputError(SourceLocation{file, 0}, "json", e.what());
+  }
+}
+
+namespace {
+
+std::vector<Landmark> LandmarksFromGeoJson(const json& root, std::string_view text, const fs::path& file) {
   if (!root.is_object()) throw InputError(SourceLocation{file, 1}, "type", "GeoJSON root must be an object");
   const std::string type = root.value("type", std::string());
 
@@ -194,5 +208,7 @@ std::vector<Landmark> ReadLandmarksGeoJson(const fs::path& file) {
   if (ignored > 0) spdlog::debug("{}: {} non-Point features ignored", file.string(), ignored);
   return landmarks;
 }
+
+}  // namespace
 
 }  // namespace semslam

@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "semslam/core/binary_io.h"
+#include "semslam/map/map_validation.h"
 
 namespace semslam {
 
@@ -173,6 +174,11 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
     r.Fail("keypoint labels of the wrong size");
   }
 
+  std::optional<Eigen::Vector3d> gps_enu;
+  if (has_gps) gps_enu = gps;
+  CheckKeyFrameRecord({id, timestamp, &camera, baseline, features.image_width, features.image_height,
+                       &features.keypoints, &right_u, &depth, gps_enu, gps_sigma},
+                      r.file());
   Frame frame(frame_id, timestamp,
               MakeFrameData(camera, stereo, std::move(features), std::move(right_u), std::move(depth)));
   frame.SetPose(camera_from_world);
@@ -212,6 +218,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
   if (!position.allFinite()) r.Fail("position is not finite");
   const int visible = r.Get<std::int32_t>();
   const int found = r.Get<std::int32_t>();
+  CheckPointRecord(id, position, visible, found, r.file());
   const LabelDistribution labels = LabelDistribution::ReadFrom(r);
   const auto observations = r.GetVector<std::uint64_t>();
   if (observations.size() % 2 != 0) r.Fail("odd observation list");
@@ -266,11 +273,15 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
   const auto num_keyframes = r.Get<std::uint64_t>();
   std::unordered_map<std::uint64_t, KeyFrame*> by_id;
   std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;
+  std::uint64_t last_id = 0;
   for (std::uint64_t i = 0; i < num_keyframes; ++i) {
     std::uint64_t parent = kNone;
     std::vector<std::uint64_t> loops;
     auto kf = MapSerializer::ReadKeyFrame(r, &parent, &loops);
     if (by_id.count(kf->id())) r.Fail(fmt::format("duplicate keyframe id {}", kf->id()));
+    // Written in id order; the links below are matched to keyframes by that order.
+    if (!links.empty() && kf->id() < last_id) r.Fail("keyframes are not in id order");
+    last_id = kf->id();
     KeyFrame* k = map.RestoreKeyFrame(std::move(kf));
     by_id[k->id()] = k;
     links.emplace_back(parent, std::move(loops));
@@ -288,6 +299,14 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
 
   // Derived state: covisibility, spanning tree, loop edges, point normals and descriptors.
   const auto keyframes = map.KeyFrames();
+  std::unordered_map<std::uint64_t, std::uint64_t> parent_of;
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    parent_of[keyframes[i]->id()] = links[i].first == kNone ? kNoParent : links[i].first;
+    for (const auto loop : links[i].second) {
+      if (loop == keyframes[i]->id()) throw InputError(path, fmt::format("keyframe {}: loop edge to itself", loop));
+    }
+  }
+  CheckSpanningTree(parent_of, path);
   for (size_t i = 0; i < keyframes.size(); ++i) {
     KeyFrame* kf = keyframes[i];
     kf->UpdateConnections();

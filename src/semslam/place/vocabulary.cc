@@ -357,19 +357,20 @@ std::filesystem::path DefaultVocabularyPath() {
   if (const char* env = std::getenv("SEMSLAM_VOCABULARY"); env != nullptr && *env != '\0') return env;
   const std::filesystem::path relative = std::filesystem::path("vocabulary") / "semslam.voc";
   std::vector<std::filesystem::path> candidates;
-  const std::filesystem::path source = std::filesystem::path(SEMSLAM_SOURCE_DIR) / "data" / relative;
-  if (std::string_view(SEMSLAM_SOURCE_DIR).size() > 0) candidates.push_back(source);
-  // Installed: <prefix>/bin/semslam -> <prefix>/share/semslam/vocabulary/semslam.voc.
+  // Installed: <prefix>/bin/semslam -> <prefix>/share/semslam/vocabulary/semslam.voc (first, so that an installed
+  // binary uses its own vocabulary even while the source tree it was built from is still there).
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (!ec) candidates.push_back(exe.parent_path().parent_path() / "share" / "semslam" / relative);
+  const std::filesystem::path source = std::filesystem::path(SEMSLAM_SOURCE_DIR) / "data" / relative;
+  if (std::string_view(SEMSLAM_SOURCE_DIR).size() > 0) candidates.push_back(source);
   if (std::string_view(SEMSLAM_INSTALL_DATADIR).size() > 0) {
     candidates.push_back(std::filesystem::path(SEMSLAM_INSTALL_DATADIR) / relative);
   }
   for (const auto& c : candidates) {
     if (std::filesystem::exists(c, ec)) return c;
   }
-  return candidates.empty() ? std::filesystem::path("data") / relative : candidates.front();
+  return std::string_view(SEMSLAM_SOURCE_DIR).size() > 0 ? source : std::filesystem::path("data") / relative;
 }
 
 }  // namespace semslam

@@ -125,8 +125,8 @@ class Vocabulary {
 };
 
 // The vocabulary semslam uses unless told otherwise: $SEMSLAM_VOCABULARY if set; else
-// data/vocabulary/semslam.voc in the source tree; else share/semslam/vocabulary/semslam.voc next to the
-// installed executable (../share relative to its directory) or under the install prefix. Returns the first
+// share/semslam/vocabulary/semslam.voc next to the installed executable (../share relative to its directory);
+// else data/vocabulary/semslam.voc in the source tree; else the one under the install prefix. Returns the first
 // that exists, or the source-tree path if none does (so the error names a sensible file).
 std::filesystem::path DefaultVocabularyPath();
 

@@ -10,6 +10,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/eval/trajectory_metrics.h"
 #include "semslam/geo/georeference_json.h"
 #include "semslam/semantics/class_table.h"
 
@@ -101,6 +102,50 @@ PlotOptions Titled(PlotOptions options, std::string title) {
   return options;
 }
 
+// trajectory.png for every run; ate.png and rpe.png with a ground truth. In the level frame of the ground truth's
+// first camera (metres), the estimate aligned to it as `semslam eval` does (Sim(3) monocular, SE(3) stereo); or,
+// without a ground truth, the estimate in the level map frame (map units when monocular).
+template <typename Write>
+void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>& frames, const PlotOptions& plots,
+                          const Write& write) {
+  if (frames.size() < 2) return;
+  const Sim3d level = LevelFromCameraWorld();
+  Trajectory estimate;
+  for (const FramePose& f : frames) estimate.push_back({f.timestamp, f.world_from_camera});
+  PlotOptions options = plots;
+  options.north_up = false;
+  TrajectoryPlotInput input;
+  std::optional<ErrorSeries> series;
+  if (inputs.truth && inputs.truth->size() >= 2) {
+    try {
+      series = ComputeErrorSeries(estimate, *inputs.truth, inputs.monocular ? Alignment::kSim3 : Alignment::kSe3);
+    } catch (const EvaluationError& e) {
+      spdlog::warn("no error plots: {}", e.what());
+    }
+  }
+  if (series) {
+    for (const StampedPose& p : *inputs.truth) input.truth.push_back(level * p.world_from_camera.translation);
+    for (const Rigid3d& p : series->aligned) input.estimate.push_back(level * p.translation);
+    input.errors = series->ate.errors;
+    input.estimate_label = inputs.monocular ? "estimate, Sim(3)-aligned" : "estimate, SE(3)-aligned";
+    options.metres = true;
+  } else {
+    for (const FramePose& f : frames) input.estimate.push_back(level * f.world_from_camera.translation);
+    options.metres = !inputs.monocular;
+  }
+  write("trajectory.png",
+        RenderTrajectoryPlot(input, Titled(options, series ? "Trajectory and ground truth (top view)"
+                                                           : "Trajectory (top view, map frame)")));
+  if (!series) return;
+  ErrorPlotInput ate{series->distance_m, series->ate.errors, "ATE (m)"};
+  write("ate.png", RenderErrorPlot(ate, Titled(options, fmt::format("Absolute trajectory error ({} alignment)",
+                                                                      inputs.monocular ? "Sim(3)" : "SE(3)"))));
+  ErrorPlotInput rpe{series->distance_m, series->rpe_trans_m, "RPE translation (m)"};
+  rpe.distance_m.erase(rpe.distance_m.begin());
+  rpe.error.erase(rpe.error.begin());
+  write("rpe.png", RenderErrorPlot(rpe, Titled(options, "Relative pose error between consecutive frames")));
+}
+
 }  // namespace
 
 GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, const GeoOptions& options) {
@@ -113,9 +158,11 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
 
   // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion.
   std::optional<GpsLog> log = inputs.gps;
-  if (!log && !inputs.gps_path.empty()) log = ReadGps(inputs.gps_path, options.gps_read);
+  if (!log && !inputs.gps_path.empty()) {
+    log = ReadGps(inputs.gps_path, options.gps_read);
+    LogSkippedFixes(*log);  // a log passed in was reported by whoever read it
+  }
   if (log) {
-    LogSkippedFixes(*log);
     summary.gps_format = log->format;
     summary.gps_fixes = static_cast<int>(log->fixes.size());
     summary.gps_skipped = static_cast<int>(log->skipped.size());
@@ -164,6 +211,8 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
   const FramePositions keyframe_positions = Positions(inputs.keyframes);
   if (out.georeference) {
     const Georeference& g = *out.georeference;
+    WriteFileAtomically(out_dir / "georeference.json", GeoreferenceToJson(g) + "\n");
+    out.files.push_back(out_dir / "georeference.json");
     // 2. The WGS84 trajectory.
     WriteTrajectoryWgs84(out_dir / "trajectory_wgs84.csv", trajectory, g);
     out.files.push_back(out_dir / "trajectory_wgs84.csv");
@@ -223,10 +272,14 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
       WritePlot(plots / name, image);
       out.files.push_back(plots / name);
     };
-    // Without GPS the map is shown level (the first camera looking north), in map units.
+    // Without GPS the map is shown level (the first camera looking up the page), in map units when monocular.
     const Georeference view_frame =
         out.georeference ? *out.georeference : Georeference(EnuFrame(Wgs84{0, 0, 0}), LevelFromCameraWorld());
     const Points3d trajectory_enu = TrajectoryEnu(trajectory, view_frame);
+    PlotOptions view_options = options.plots;
+    view_options.north_up = out.georeference.has_value();
+    view_options.metres = out.georeference.has_value() || !inputs.monocular;
+    WriteTrajectoryPlots(inputs, trajectory, options.plots, write);
     if (out.georeference && out.alignment) {
       GpsPlotInput gps;
       for (const GpsSample& sample : out.samples) gps.gps_enu.push_back(sample.enu);
@@ -252,8 +305,10 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
         points_enu.push_back(view_frame.MapToEnu(p.position));
         labels.push_back(p.label);
       }
-      write("semantic_map.png", RenderSemanticMapPlot(points_enu, labels, trajectory_enu,
-                                                      Titled(options.plots, "Semantic map (top view)")));
+      write("semantic_map.png",
+            RenderSemanticMapPlot(points_enu, labels, trajectory_enu,
+                                  Titled(view_options, out.georeference ? "Semantic map (top view, north up)"
+                                                                        : "Semantic map (top view, map frame)")));
     }
     if (out.georeference && !out.landmarks.empty()) {
       Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;

@@ -7,7 +7,11 @@
 //   OUT/landmarks.geojson      WGS84 points with map_xyz, nearest keyframe, membership (with GPS and a
 //   catalogue) OUT/topology.{geojson,graphml,dot,json}                                   (with GPS)
 //   OUT/objects.json           clustered labeled points                       (with labeled points)
-//   OUT/plots/gps.png, topology.png, semantic_map.png, membership.png         (when their inputs exist)
+//   OUT/georeference.json      map -> ENU -> WGS84                            (with GPS)
+//   OUT/plots/trajectory.png   the trajectory from above (against the ground truth when there is one)
+//   OUT/plots/ate.png, rpe.png the errors along the drive                     (with a ground truth)
+//   OUT/plots/gps.png, topology.png, membership.png                           (with GPS; landmarks)
+//   OUT/plots/semantic_map.png                                                (with labeled points)
 //
 // and, for `semslam localize`, the map file's extra sections ("geo": georeference and placed landmarks;
 // "topology": the topology JSON that `semslam route` reads).
@@ -21,6 +25,7 @@
 #include "semslam/geo/frame_position.h"
 #include "semslam/geo/gps.h"
 #include "semslam/geo/gps_fusion.h"
+#include "semslam/geometry/trajectory.h"
 #include "semslam/landmarks/catalogue.h"
 #include "semslam/landmarks/landmark_map.h"
 #include "semslam/objects/object_map.h"
@@ -39,6 +44,7 @@ struct GeoInputs {
   std::filesystem::path landmarks_path;  // CSV, GeoJSON or OSM catalogue (read when `landmarks` is empty)
   std::vector<LabeledPoint> points;      // labeled map points (map frame)
   bool monocular = true;                 // Sim(3) alignment and fusion; false: SE(3) (stereo)
+  std::optional<Trajectory> truth;       // the sequence's ground truth (world_from_camera, metres), for plots
   std::optional<Wgs84> enu_origin;       // default: the first GPS fix
 };
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "semslam/core/error.h"
+#include "semslam/core/yaml_file.h"
 #include "semslam/semantics/class_table.h"
 #include "semslam/semantics/torch_networks.h"
 
@@ -164,12 +165,7 @@ ModelCard::Format ModelCard::ResolvedFormat() const {
 ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& base_dir,
                          const std::filesystem::path& source) {
   CardParser p(source);
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml);
-  } catch (const YAML::Exception& e) {
-    throw InputError(SourceLocation{source, e.mark.line >= 0 ? e.mark.line + 1 : 0}, "YAML: " + e.msg);
-  }
+  const YAML::Node root = LoadYamlText(yaml, source);
   if (!root.IsMap()) throw InputError(source, "a model card must be a YAML map");
   ModelCard card;
   card.name = root["name"] ? p.Get<std::string>(root["name"], "name") : source.stem().string();

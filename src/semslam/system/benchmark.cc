@@ -88,7 +88,7 @@ std::vector<MapSizeBucket> TrackingByMapSize(const std::filesystem::path& tracki
       continue;
     }
     const auto fields = SplitFields(*line, ',');
-    if (fields.size() != 6) throw InputError(reader.Where(), "expected 6 fields");
+    if (fields.size() < 6) throw InputError(reader.Where(), "expected at least 6 fields");
     if (fields[1] != "ok") continue;
     samples.emplace_back(static_cast<size_t>(ParseInt(fields[5], reader.Where(), "map_points")),
                          ParseDouble(fields[2], reader.Where(), "tracking_ms"));
@@ -119,6 +119,7 @@ BenchResult RunBenchmark(const BenchOptions& options) {
                                      options.sequence.string(),
                                      "--out",
                                      dir.string(),
+                                     "--overwrite",  // the benchmark's own folders
                                      "-q"};
     argv.insert(argv.end(), options.run_args.begin(), options.run_args.end());
     RunProcess(argv);

@@ -62,6 +62,8 @@ DemoSummary RunDemo(const DemoOptions& options) {
   run.gps = city / "oxts";
   run.landmarks = city / "landmarks.csv";
   run.show_progress = options.show_progress;
+  run.provenance = options.provenance;
+  run.overwrite = true;  // the demo's own folder: a second demo replaces the first
   spdlog::info("demo: SLAM over the city -> {}", run.output.string());
   const RunSummary run_summary = RunSequence(run);
 
@@ -72,6 +74,7 @@ DemoSummary RunDemo(const DemoOptions& options) {
   localize.slam.mode = run.slam.mode;
   localize.slam.pacing = Pacing::kFast;
   localize.show_progress = options.show_progress;
+  localize.overwrite = true;
   spdlog::info("demo: a second drive relocalized against the map without GPS -> {}",
                localize.output.string());
   const LocalizeSummary localize_summary = LocalizeSequence(localize);

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <string>
 
+#include "semslam/system/run_metadata.h"
 #include "semslam/system/slam_system.h"
 
 namespace semslam {
@@ -26,6 +27,7 @@ struct DemoOptions {
   Pacing pacing = Pacing::kRealtime;
   std::string segmenter = "truth-noisy:0.25";
   bool show_progress = true;
+  RunProvenance provenance;  // recorded in run/run.json
 
   void Check() const;
 };

@@ -14,6 +14,9 @@
 #include "semslam/io/trajectory_io.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
+#include "semslam/core/interrupt.h"
+#include "semslam/system/frame_reader.h"
+#include "semslam/system/run_output_dir.h"
 #include "semslam/sim/scene_file.h"
 #include "semslam/system/sequence_runner.h"
 
@@ -86,7 +89,10 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   const bool stereo = slam_options.mode == SensorMode::kStereo;
   const size_t first = options.first_frame;
   const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "localize");
-  std::filesystem::create_directories(options.output);
+  OutputDirOptions output_dir_options;
+  output_dir_options.overwrite = options.overwrite;
+  output_dir_options.command = "localize";
+  const RunOutputDir output_dir(options.output, output_dir_options);
   SlamSystem slam(slam_options, sequence->camera(), sequence->stereo());
   const MapFileContents contents = slam.LoadMap(options.map);
   std::optional<GeoContext> geo;
@@ -100,10 +106,13 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
 
   std::vector<LocalizedFrame> localized;
   ProgressReporter progress("localize", end - first, options.show_progress);
-  for (size_t i = first; i < end; ++i) {
-    const cv::Mat left = sequence->LoadImage(i, 0);
-    const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
-    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
+  FrameReader frame_reader(*sequence, stereo, options.max_bad_frames_in_row);
+  size_t frames_run = 0;
+  for (size_t i = first; i < end && !InterruptRequested() && !frame_reader.TooManyInRow(); ++i) {
+    ++frames_run;
+    const std::optional<FrameImages> images = frame_reader.Read(i);
+    if (!images) continue;
+    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), images->left, images->right);
     if (result.state == TrackingState::kOk && result.camera_from_world) {
       LocalizedFrame f;
       f.frame = i;
@@ -184,7 +193,21 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   }
   summary.seconds = watch.ElapsedSeconds();
   report["seconds"] = summary.seconds;
+  report["bad_frames"] = frame_reader.bad_frames().size();
+  const bool interrupted = frames_run < end - first && InterruptRequested();
+  report["status"] = interrupted ? "interrupted" : frame_reader.TooManyInRow() ? "stopped_bad_frames" : "complete";
   WriteFileAtomically(options.output / "localize.json", report.dump(2) + "\n");
+  if (interrupted) {
+    throw Interrupted(InterruptSignal(), fmt::format("interrupted by {} after {} of {} frames; what was localized "
+                                                     "is saved in {}",
+                                                     InterruptName(), frames_run, end - first,
+                                                     options.output.string()));
+  }
+  if (frame_reader.TooManyInRow()) {
+    throw InputError(options.output, fmt::format("{} bad frames in a row (the last: {}); localization stopped "
+                                                 "and saved what it did in this folder",
+                                                 frame_reader.bad_in_row(), frame_reader.bad_frames().back().reason));
+  }
   return summary;
 }
 

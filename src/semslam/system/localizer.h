@@ -25,6 +25,8 @@ struct LocalizeOptions {
   size_t end_frame = std::numeric_limits<size_t>::max();
   size_t max_landmarks = 3;  // nearest landmarks reported per frame
   bool show_progress = true;
+  bool overwrite = false;              // as RunOptions::overwrite (system/run_output_dir.h)
+  size_t max_bad_frames_in_row = 10;   // as RunOptions::max_bad_frames_in_row
 
   void Check() const;
 };

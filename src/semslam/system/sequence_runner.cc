@@ -8,6 +8,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/eval/trajectory_metrics.h"
 #include "semslam/geo/gps.h"
@@ -20,7 +21,13 @@
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/core/log_file.h"
+#include "semslam/system/frame_trajectory.h"
+#include "semslam/system/frame_reader.h"
+#include "semslam/system/run_input_checks.h"
+#include "semslam/system/run_output_dir.h"
 #include "semslam/system/semantic_evaluation.h"
+#include "semslam/system/slam_config.h"
 
 namespace semslam {
 
@@ -28,6 +35,14 @@ void RunOptions::Check() const {
   Require(!sequence.empty(), "run: --sequence is required");
   Require(!output.empty(), "run: --out is required");
   Require(first_frame < end_frame, "run: the frame range is empty");
+  Require(gps_every >= 1, "run: --gps-every must be at least 1 frame");
+  // Paths are recorded in run.json and the report (UTF-8): refused now rather than after the last frame.
+  RequireUtf8Argument(sequence, "--sequence");
+  RequireUtf8Argument(output, "--out");
+  RequireUtf8Argument(map_in, "--map-in");
+  RequireUtf8Argument(gps, "--gps");
+  RequireUtf8Argument(landmarks, "--landmarks");
+  RequireUtf8Argument(segmenter, "--segmenter");
   slam.Check();
 }
 
@@ -101,6 +116,58 @@ nlohmann::json AccuracyJson(const ClassAccuracyCounts& counts) {
   return {{"accuracy", counts.Accuracy()}, {"evaluated", counts.total_evaluated}, {"per_class", per_class}};
 }
 
+std::vector<double> FrameTimes(const ImageSequence& sequence, size_t first, size_t end) {
+  std::vector<double> times;
+  times.reserve(end - first);
+  for (size_t i = first; i < end; ++i) times.push_back(sequence.Timestamp(i));
+  return times;
+}
+
+// The ground truth over the frames that were run (path_length_m is the length of the drive that was run, not
+// of the whole sequence); nullopt when it has fewer than two poses there.
+std::optional<Trajectory> TruthOverFrames(const Trajectory& truth, double first_time, double last_time) {
+  constexpr double kSlack = 1e-6;
+  Trajectory part;
+  for (const StampedPose& pose : truth) {
+    if (pose.timestamp >= first_time - kSlack && pose.timestamp <= last_time + kSlack) part.push_back(pose);
+  }
+  if (part.size() < 2) return std::nullopt;
+  return part;
+}
+
+// How the frame loop ended, for run.json and the exit status.
+struct FrameLoopEnd {
+  std::string status = "complete";
+  size_t last_frame = 0;   // the last frame read (tracked or skipped)
+  size_t frames_run = 0;   // frames read, bad ones included
+};
+
+nlohmann::json BadFramesJson(const FrameReader& reader) {
+  constexpr size_t kListed = 20;
+  nlohmann::json listed = nlohmann::json::array();
+  for (size_t k = 0; k < std::min(kListed, reader.bad_frames().size()); ++k) {
+    listed.push_back({{"frame", reader.bad_frames()[k].frame}, {"reason", reader.bad_frames()[k].reason}});
+  }
+  return {{"count", reader.bad_frames().size()}, {"first", listed}};
+}
+
+// After the outputs are saved: a run that did not go through every frame says why, through the exit status.
+void ReportEarlyEnd(const FrameLoopEnd& loop, const FrameReader& reader, size_t first, size_t end,
+                    const std::filesystem::path& output) {
+  if (loop.status == "interrupted") {
+    throw Interrupted(InterruptSignal(),
+                      fmt::format("interrupted by {} after {} of {} frames; the trajectory so far, the map and "
+                                  "run.json (status \"interrupted\") are saved in {}",
+                                  InterruptName(), loop.frames_run, end - first, output.string()));
+  }
+  if (loop.status == "stopped_bad_frames") {
+    const BadFrame& last = reader.bad_frames().back();
+    throw InputError(output, fmt::format("{} bad frames in a row up to frame {} (the last: {}); the run stopped "
+                                         "and saved frames {}..{} in this folder",
+                                         reader.bad_in_row(), last.frame, last.reason, first, loop.last_frame));
+  }
+}
+
 }  // namespace
 
 RunSummary RunSequence(const RunOptions& options) {
@@ -115,13 +182,19 @@ RunSummary RunSequence(const RunOptions& options) {
   if (!options.gps.empty()) {
     gps_log = ReadGps(options.gps);
     LogSkippedFixes(*gps_log);
+    CheckGpsLog(*gps_log, FrameTimes(*sequence, first, end));
   }
   std::optional<std::vector<Landmark>> catalogue;
   if (!options.landmarks.empty()) {
     catalogue = ReadLandmarks(options.landmarks);
     if (catalogue->empty()) throw InputError(options.landmarks, "the landmark catalogue holds no landmark");
+    WarnAboutFarLandmarks(*catalogue, options.landmarks, gps_log);
   }
-  std::filesystem::create_directories(options.output);
+  // Writable, not in use by another run, and nothing of an earlier run left in it: before the first frame.
+  OutputDirOptions output_dir_options;
+  output_dir_options.overwrite = options.overwrite;
+  const RunOutputDir output_dir(options.output, output_dir_options);
+  const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
   spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
                sequence->directory().string(), first, end - 1, stereo ? "stereo" : "monocular",
                sequence->camera().ToString());
@@ -136,21 +209,38 @@ RunSummary RunSequence(const RunOptions& options) {
   slam.EnableSegmentation(segmenter);
 
   ProgressReporter progress("run", end - first, options.show_progress);
-  // Per frame: how tracking went and how big the map was (tracking time against map size).
-  std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points\n";
+  // Per frame: how tracking went, how big the map was (tracking time against map size) and the memory the
+  // process held (resident set, MiB).
+  std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points,rss_mib\n";
+  FrameReader frame_reader(*sequence, stereo, options.max_bad_frames_in_row);
+  FrameLoopEnd loop;
   for (size_t i = first; i < end; ++i) {
-    const cv::Mat left = sequence->LoadImage(i, 0);
-    const cv::Mat right = stereo ? sequence->LoadImage(i, 1) : cv::Mat();
-    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), left, right);
-    size_t keyframes = 0, points = 0;
-    {
-      auto lock = slam.map().ReadLock();
-      keyframes = slam.map().NumKeyFrames();
-      points = slam.map().NumMapPoints();
+    if (InterruptRequested()) {  // the frame before was finished: stop here and save
+      loop.status = "interrupted";
+      break;
     }
-    tracking_csv += fmt::format("{},{},{:.3f},{},{},{}\n", i, ToString(result.state), result.milliseconds,
-                                result.matched_points, keyframes, points);
-    progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), keyframes));
+    loop.last_frame = i;
+    ++loop.frames_run;
+    ScopedTimer frame_timer(slam.timing(), "frame");  // the whole system per frame: loading, tracking, pacing
+    const std::optional<FrameImages> images = frame_reader.Read(i);
+    size_t keyframes = 0, points = 0;
+    if (images) {
+      const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), images->left, images->right);
+      {
+        auto lock = slam.map().ReadLock();
+        keyframes = slam.map().NumKeyFrames();
+        points = slam.map().NumMapPoints();
+      }
+      tracking_csv += fmt::format("{},{},{:.3f},{},{},{},{:.1f}\n", i, ToString(result.state),
+                                  result.milliseconds, result.matched_points, keyframes, points, CurrentRssMiB());
+      progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), keyframes));
+      continue;
+    }
+    tracking_csv += fmt::format("{},bad_frame,0,0,,,{:.1f}\n", i, CurrentRssMiB());
+    if (frame_reader.TooManyInRow()) {
+      loop.status = "stopped_bad_frames";
+      break;
+    }
   }
   WriteFileAtomically(options.output / "tracking.csv", tracking_csv);
   slam.Finish();
@@ -161,7 +251,8 @@ RunSummary RunSequence(const RunOptions& options) {
   const Trajectory trajectory = slam.FrameTrajectory();
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
-  WriteKittiPoses(options.output / "trajectory.kitti", trajectory);
+  const DenseTrajectory kitti = WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(),
+                                                          first, first + stats.frames);
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
@@ -174,11 +265,13 @@ RunSummary RunSequence(const RunOptions& options) {
   geo.landmarks = std::move(catalogue);
   geo.landmarks_path = options.landmarks;
   geo.monocular = !stereo;
+  geo.truth = sequence->GroundTruth();
   for (const SemanticPoint& p : semantic_points) {
     if (IsValidTrainId(p.label)) geo.points.push_back({p.position, p.label, p.confidence});
   }
   GeoOptions geo_options;
   geo_options.fuse = options.gps_fusion;
+  geo_options.fusion.sampling.every_n_frames = options.gps_every;
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
@@ -190,10 +283,15 @@ RunSummary RunSequence(const RunOptions& options) {
   summary.statistics = stats;
   summary.seconds = watch.ElapsedSeconds();
   nlohmann::json run = {
+      {"status", loop.status},
       {"sequence", sequence->directory().string()},
+      {"sequence_name", sequence->name()},
       {"mode", stereo ? "stereo" : "mono"},
       {"frames", stats.frames},
       {"first_frame", first},
+      {"last_frame", loop.last_frame},
+      {"frames_requested", end - first},
+      {"bad_frames", BadFramesJson(frame_reader)},
       {"tracked", stats.tracked},
       {"keyframes", stats.keyframes},
       {"points", stats.map_points},
@@ -205,6 +303,12 @@ RunSummary RunSequence(const RunOptions& options) {
       {"seconds", summary.seconds},
       {"peak_rss_mib", PeakRssMiB()},
   };
+  run["trajectory_kitti"] = {{"frames", kitti.source.size()},
+                             {"own_pose", kitti.Count(PoseSource::kEstimated)},
+                             {"first_pose", kitti.Count(PoseSource::kFirstPose)},
+                             {"motion_model", kitti.Count(PoseSource::kMotionModel)},
+                             {"held", kitti.Count(PoseSource::kHeld)},
+                             {"identity", kitti.Count(PoseSource::kNone)}};
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopEvent& e : slam.Loops()) {
     loops.push_back({{"query_keyframe", e.query_keyframe},
@@ -244,7 +348,10 @@ RunSummary RunSequence(const RunOptions& options) {
       run["ate_alignment"] = stereo ? "se3" : "sim3";
       run["ate_scale"] = ate.scale;
       run["ate_matched"] = ate.matched;
-      run["path_length_m"] = PathLength(*truth);
+      if (const auto driven =
+              TruthOverFrames(*truth, sequence->Timestamp(first), sequence->Timestamp(loop.last_frame))) {
+        run["path_length_m"] = PathLength(*driven);
+      }
       if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && geo_outputs.georeference) {
         const SceneTruth truth_scene = ReadSceneTruth(scene->parent_path());
         run["geo_evaluation"] = nlohmann::json::parse(EvaluateGeo(geo_outputs, geo, truth_scene).ToJson());
@@ -254,11 +361,17 @@ RunSummary RunSequence(const RunOptions& options) {
     }
   }
   run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
+  run["provenance"] = ProvenanceJson(options.provenance);
+  run["config"] = EffectiveConfigJson(options, slam.options(), end);
+  WriteFileAtomically(options.output / "config.yaml", SlamConfigToYaml(slam.options()));
   WriteFileAtomically(options.output / "run.json", run.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
   const HtmlReportResult report = WriteHtmlReport(options.output);
   spdlog::info("report: {} ({} of {} map points shown)", report.path.string(), report.points_shown,
                report.map_points);
+  summary.status = loop.status;
+  summary.bad_frames = frame_reader.bad_frames().size();
+  ReportEarlyEnd(loop, frame_reader, first, end, options.output);
   return summary;
 }
 

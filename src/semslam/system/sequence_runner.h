@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "semslam/system/run_metadata.h"
 #include "semslam/system/slam_system.h"
 
 namespace semslam {
@@ -31,8 +32,16 @@ struct RunOptions {
   std::filesystem::path landmarks;
   bool gps_fusion =
       true;  // pose-graph fusion of the fixes; false: one robust similarity (the paper's method)
+  int gps_every = 30;  // frames between the GPS fixes used (one sample per N frames)
   bool save_map = true;
   bool show_progress = true;
+  RunProvenance provenance;  // the command line and the binary's version, for run.json
+  // An --out that holds an earlier run is refused unless this is set; then it is emptied first
+  // (system/run_output_dir.h).
+  bool overwrite = false;
+  // Bad frames (unreadable, truncated, of another size) are skipped; more than this many in a row stop the
+  // run, which then saves what it did.
+  size_t max_bad_frames_in_row = 10;
 
   void Check() const;
 };
@@ -42,9 +51,15 @@ struct RunSummary {
   double seconds = 0.0;
   double ate_rmse = -1.0;  // against the sequence's ground truth, when it has one (Sim(3) mono, SE(3) stereo)
   double label_accuracy = -1.0;  // map-point labels against the synthetic city's surfaces, when known
+  // "complete", "interrupted" (a signal; RunSequence then throws Interrupted after saving) or
+  // "stopped_bad_frames" (it then throws InputError after saving).
+  std::string status = "complete";
+  size_t bad_frames = 0;
 };
 
-// Throws InputError for unreadable inputs and InvalidArgument for bad options.
+// Throws InputError for unreadable inputs and InvalidArgument for bad options. A run stopped by a signal
+// (core/interrupt.h) saves the trajectory of the frames done, the map and run.json (status "interrupted"),
+// then throws Interrupted; one stopped by too many bad frames in a row saves the same, then throws InputError.
 RunSummary RunSequence(const RunOptions& options);
 
 // Parses "A:B" (either side may be empty) into [first, end). Throws InvalidArgument.

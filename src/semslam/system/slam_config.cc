@@ -7,6 +7,7 @@
 #include <map>
 
 #include "semslam/core/error.h"
+#include "semslam/core/yaml_file.h"
 
 namespace semslam {
 namespace {
@@ -93,22 +94,39 @@ SourceLocation Where(const std::filesystem::path& file, const YAML::Mark& mark) 
   return {file, mark.line >= 0 ? mark.line + 1 : 0};
 }
 
+// A map starts from init_min_matches matches between two frames: fewer features than that per frame and no run
+// could ever start one (it would track nothing, silently).
+void CheckFeatureBudget(const SlamOptions& o, const std::filesystem::path& file,
+                        const std::map<std::string, int>& lines) {
+  const auto where = [&](const std::string& field) {
+    const auto it = lines.find(field);
+    return SourceLocation{file, it == lines.end() ? 0 : it->second};
+  };
+  const int init_features = o.tracker.init_num_features > 0 ? o.tracker.init_num_features : 2 * o.tracker.orb.num_features;
+  if (o.tracker.orb.num_features < o.tracker.init_min_matches) {
+    throw InputError(where("features.num_features"), "features.num_features",
+                     fmt::format("{} features per frame are fewer than the {} matches a map needs to start "
+                                 "(tracking.init_min_matches): no map could be made",
+                                 o.tracker.orb.num_features, o.tracker.init_min_matches));
+  }
+  if (init_features < o.tracker.init_min_matches) {
+    throw InputError(where("features.init_num_features"), "features.init_num_features",
+                     fmt::format("{} features for initialization are fewer than the {} matches a map needs to "
+                                 "start (tracking.init_min_matches)",
+                                 init_features, o.tracker.init_min_matches));
+  }
+}
+
 }  // namespace
 
 void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::BadFile&) {
-    throw InputError(file, "cannot open the configuration file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(Where(file, e.mark), e.msg);
-  }
+  const YAML::Node root = LoadYamlFile(file);
   if (root.IsNull()) return;  // an empty file changes nothing
   if (!root.IsMap())
     throw InputError(Where(file, root.Mark()), "the configuration must be a map of sections");
   SlamOptions updated = *options;
   auto sections = Sections(&updated);
+  std::map<std::string, int> lines;  // "section.key" -> line, for the checks across keys below
   for (const auto& entry : root) {
     const std::string section_name = entry.first.as<std::string>();
     const auto section = sections.find(section_name);
@@ -123,6 +141,7 @@ void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
       const std::string field = section_name + "." + key;
       const auto it = section->second.find(key);
       if (it == section->second.end()) throw InputError(Where(file, item.first.Mark()), field, "unknown key");
+      lines[field] = item.first.Mark().line + 1;
       try {
         it->second.read(item.second);
       } catch (const YAML::Exception& e) {
@@ -137,6 +156,7 @@ void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
   } catch (const InvalidArgument& e) {
     throw InputError(file, e.what());
   }
+  CheckFeatureBudget(updated, file, lines);
   *options = updated;
 }
 

@@ -157,16 +157,7 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                                         const cv::Mat& right, const cv::Mat& mask) {
   Require(!finished_, "ProcessFrame after Finish");
-  if (options_.pacing == Pacing::kRealtime) {
-    // Feed frames no faster than the camera recorded them.
-    if (!clock_) {
-      clock_.emplace();
-      first_timestamp_ = timestamp;
-    }
-    const double due_ms = (timestamp - first_timestamp_) * 1000.0;
-    const double wait_ms = due_ms - clock_->ElapsedMs();
-    if (wait_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(wait_ms));
-  }
+  if (options_.pacing == Pacing::kRealtime) pacer_.Wait(timestamp);  // no faster than the camera recorded
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
   if (segmentation_) SubmitForSegmentation(frame_id, left, result);

@@ -23,6 +23,7 @@
 #include "semslam/map/map_file.h"
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/semantics/segmentation_worker.h"
+#include "semslam/system/pacing.h"
 #include "semslam/tracking/tracker.h"
 
 namespace semslam {
@@ -134,8 +135,7 @@ class SlamSystem {
   size_t frames_ = 0;
   size_t tracked_ = 0;
   size_t resets_ = 0;
-  double first_timestamp_ = 0.0;
-  std::optional<Stopwatch> clock_;
+  RealtimePacer pacer_;
   bool finished_ = false;
   // Trajectory records of maps that were reset (kept so no frame record is lost).
   std::vector<FrameRecord> old_records_;

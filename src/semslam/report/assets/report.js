@@ -1,76 +1,5 @@
-#include "semslam/report/html_report_assets.h"
-
-namespace semslam {
-
-std::string_view HtmlReportCss() {
-  return R"CSS(
-:root { --fg: #1d232b; --muted: #5d6875; --line: #d9dee4; --head: #f2f4f7; --accent: #1f6fb2; }
-* { box-sizing: border-box; }
-body { margin: 0; font: 15px/1.45 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: var(--fg);
-  background: #fbfcfd; }
-header { position: sticky; top: 0; z-index: 5; background: #fff; border-bottom: 1px solid var(--line);
-  padding: 10px 24px; display: flex; flex-wrap: wrap; align-items: baseline; gap: 8px 24px; }
-h1 { font-size: 20px; margin: 0; }
-nav a { margin-right: 14px; color: var(--accent); text-decoration: none; white-space: nowrap; }
-nav a:hover { text-decoration: underline; }
-main { max-width: 1400px; margin: 0 auto; padding: 8px 24px 24px; }
-section { margin: 28px 0; }
-h2 { font-size: 18px; border-bottom: 1px solid var(--line); padding-bottom: 4px; }
-p { max-width: 60em; }
-code { font-size: 13px; background: var(--head); padding: 0 3px; border-radius: 3px; }
-table { border-collapse: collapse; margin: 10px 0 18px; background: #fff; }
-caption { text-align: left; font-weight: 600; padding: 4px 0; }
-th, td { border: 1px solid var(--line); padding: 4px 10px; text-align: left; vertical-align: top; }
-thead th { background: var(--head); font-weight: 600; white-space: nowrap; }
-table.kv th { background: var(--head); font-weight: 500; width: 16em; }
-td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
-th.sort-key { cursor: pointer; user-select: none; }
-th[data-order="asc"]::after { content: " \25B2"; font-size: 10px; }
-th[data-order="desc"]::after { content: " \25BC"; font-size: 10px; }
-.detail { color: var(--muted); font-size: 13px; }
-.swatch { display: inline-block; width: 12px; height: 12px; border-radius: 2px; margin-right: 6px;
-  vertical-align: -1px; border: 1px solid rgba(0,0,0,0.25); }
-.bar { display: inline-block; height: 10px; background: var(--accent); opacity: 0.7; border-radius: 2px;
-  min-width: 1px; }
-td:last-child .bar { max-width: 100%; }
-#module-table td:last-child { width: 180px; }
-.viewer { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
-.canvas-wrap { position: relative; flex: 1 1 640px; min-width: 320px; height: 72vh; min-height: 420px;
-  border: 1px solid var(--line); border-radius: 4px; overflow: hidden; background: #1d2026; }
-.canvas-wrap canvas { position: absolute; left: 0; top: 0; width: 100%; height: 100%; }
-#view-canvas { touch-action: none; cursor: grab; }
-#view-canvas:active { cursor: grabbing; }
-#view-overlay { pointer-events: none; }
-.view-status { position: absolute; left: 8px; bottom: 6px; font-size: 12px; color: #c9d1d9;
-  pointer-events: none; text-shadow: 0 0 3px #000; }
-.canvas-wrap.light .view-status { color: #333; text-shadow: none; }
-.view-side { flex: 0 1 300px; min-width: 240px; }
-.buttons { display: flex; flex-wrap: wrap; gap: 6px; margin: 0 0 10px; }
-button { font: inherit; font-size: 13px; padding: 4px 10px; border: 1px solid #b9c2cc; border-radius: 4px;
-  background: #fff; cursor: pointer; }
-button:hover { background: var(--head); }
-.slider { display: block; font-size: 13px; margin: 0 0 10px; }
-.slider input { vertical-align: middle; width: 140px; }
-.toggles label { display: block; font-size: 14px; }
-.toggles { margin: 0 0 10px; }
-table.legend { width: 100%; font-size: 13px; margin-top: 0; }
-table.legend td, table.legend th { padding: 2px 6px; }
-table.legend tr.hidden-class td { opacity: 0.4; }
-table.legend tbody tr { cursor: pointer; }
-.plots { display: flex; flex-wrap: wrap; gap: 18px; }
-figure { margin: 0; flex: 1 1 560px; max-width: 100%; background: #fff; border: 1px solid var(--line);
-  border-radius: 4px; padding: 8px; }
-figure.wide { flex-basis: 100%; }
-figure img { width: 100%; height: auto; cursor: zoom-in; display: block; }
-figure.wide img { cursor: zoom-out; }
-figcaption { font-size: 13px; color: var(--muted); margin-top: 6px; }
-#js-errors { background: #fde8e8; border: 1px solid #e0a0a0; padding: 6px 12px; margin: 12px 0; }
-footer { color: var(--muted); font-size: 12px; padding: 12px 24px 24px; max-width: 1400px; margin: 0 auto; }
-)CSS";
-}
-
-std::string_view HtmlReportScript() {
-  return R"JS(
+// The HTML report's script (embedded into report.html at build time): sortable tables and the 3D view.
+// See html_report_assets.h.
 (function () {
   'use strict';
   const errorBox = document.getElementById('js-errors');
@@ -138,18 +67,9 @@ std::string_view HtmlReportScript() {
     for (let i = 0; i < out.length; ++i) out[i] = view.getFloat32(4 * i, true);
     return out;
   }
-  // Map frame (x right, y down, z forward) -> display frame (x, z, -y): z up.
-  function toDisplay(p) {
-    const out = new Float32Array(p.length);
-    for (let i = 0; i + 2 < p.length; i += 3) {
-      out[i] = p[i];
-      out[i + 1] = p[i + 2];
-      out[i + 2] = -p[i + 1];
-    }
-    return out;
-  }
+  // Positions come in the display frame: x east (or right), y north (or forward), z up.
   function geometry(entry) {
-    return entry ? toDisplay(float32FromBase64(entry.positions_b64)) : new Float32Array(0);
+    return entry ? float32FromBase64(entry.positions_b64) : new Float32Array(0);
   }
 
   const points = geometry(data.points);
@@ -158,7 +78,7 @@ std::string_view HtmlReportScript() {
   const trajectory = geometry(data.trajectory);
   const keyframes = geometry(data.keyframes);
   const landmarks = (data.landmarks || []).map(function (l) {
-    return { name: l.name, p: [l.position[0], l.position[2], -l.position[1]] };
+    return { name: l.name, p: [l.position[0], l.position[1], l.position[2]] };
   });
   const landmarkPositions = new Float32Array(landmarks.length * 3);
   landmarks.forEach(function (l, i) { landmarkPositions.set(l.p, 3 * i); });
@@ -172,13 +92,43 @@ std::string_view HtmlReportScript() {
     colors[3 * i] = c[0]; colors[3 * i + 1] = c[1]; colors[3 * i + 2] = c[2];
   }
 
-  const TRAJECTORY_COLOR = [0, 200, 255], KEYFRAME_COLOR = [255, 159, 26], LANDMARK_COLOR = [255, 79, 216];
+  const TRAJECTORY_COLOR = [10, 88, 202], KEYFRAME_COLOR = [255, 140, 0], LANDMARK_COLOR = [214, 0, 143];
+  const GRID_COLOR_LIGHT = [184, 192, 200], GRID_COLOR_DARK = [70, 76, 86];
   const FOV = 50 * Math.PI / 180;
-  const center = data.view ? [data.view.center[0], data.view.center[2], -data.view.center[1]] : [0, 0, 0];
+  const center = data.view ? data.view.center.slice() : [0, 0, 0];
   const radius = data.view && data.view.radius > 0 ? data.view.radius : 1;
-  const home = { target: center, distance: 1.6 * radius, yaw: -Math.PI / 2 - 0.6, pitch: 0.75 };
+  const units = data.units || 'map units';
+  const northUp = data.frame === 'enu';
+  // Home: straight down, north (or the first camera's forward) up the screen.
+  const TOP_PITCH = 1.5533, TOP_YAW = -Math.PI / 2;
+  const home = { target: center, distance: 1.25 * radius / Math.tan(FOV / 2), yaw: TOP_YAW, pitch: TOP_PITCH };
   const camera = { target: home.target.slice(), distance: home.distance, yaw: home.yaw, pitch: home.pitch };
-  const settings = { pointSize: labels.length < 20000 ? 3 : 2, trajectory: true, keyframes: true, landmarks: true, light: false };
+  const settings = { pointSize: labels.length < 20000 ? 3 : 2, trajectory: true, keyframes: true, landmarks: true,
+                     grid: true, light: true };
+
+  // A ground grid at the cameras' height: round spacing, about ten lines across the scene.
+  function niceStep(limit) {
+    const p = Math.pow(10, Math.floor(Math.log10(limit)));
+    const steps = [5, 2, 1];
+    for (let i = 0; i < steps.length; ++i) if (steps[i] * p <= limit) return steps[i] * p;
+    return p;
+  }
+  const gridStep = niceStep(radius / 5);
+  const grid = (function () {
+    const z = data.view && typeof data.view.grid_z === 'number' ? data.view.grid_z : center[2];
+    const lines = [];
+    const x0 = Math.floor((center[0] - 1.5 * radius) / gridStep) * gridStep;
+    const x1 = Math.ceil((center[0] + 1.5 * radius) / gridStep) * gridStep;
+    const y0 = Math.floor((center[1] - 1.5 * radius) / gridStep) * gridStep;
+    const y1 = Math.ceil((center[1] + 1.5 * radius) / gridStep) * gridStep;
+    for (let x = x0; x <= x1 + 1e-9; x += gridStep) lines.push(x, y0, z, x, y1, z);
+    for (let y = y0; y <= y1 + 1e-9; y += gridStep) lines.push(x0, y, z, x1, y, z);
+    return new Float32Array(lines);
+  })();
+  function gridLabel() {
+    const value = gridStep >= 1000 && units === 'm' ? (gridStep / 1000) + ' km' : gridStep + ' ' + units;
+    return 'grid ' + value;
+  }
 
   // ---- Column-major 4x4 matrices.
   function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
@@ -234,7 +184,8 @@ std::string_view HtmlReportScript() {
   const overlay = document.getElementById('view-overlay');
   const overlayContext = overlay.getContext('2d');
   const status = document.getElementById('view-status');
-  function background() { return settings.light ? [1, 1, 1] : [0.114, 0.125, 0.149]; }
+  function background() { return settings.light ? [0.957, 0.965, 0.973] : [0.114, 0.125, 0.149]; }
+  function gridColor() { return settings.light ? GRID_COLOR_LIGHT : GRID_COLOR_DARK; }
 
   function makeWebGl() {
     if (location.hash.indexOf('canvas2d') >= 0) return null;
@@ -276,7 +227,7 @@ std::string_view HtmlReportScript() {
       return b;
     }
     const buffers = { points: buffer(points), colors: buffer(colors), trajectory: buffer(trajectory),
-                      keyframes: buffer(keyframes), landmarks: buffer(landmarkPositions) };
+                      keyframes: buffer(keyframes), landmarks: buffer(landmarkPositions), grid: buffer(grid) };
     const sizeRange = gl.getParameter(gl.ALIASED_POINT_SIZE_RANGE);
     const maxSize = sizeRange ? sizeRange[1] : 64;
     function positions(b) {
@@ -298,6 +249,12 @@ std::string_view HtmlReportScript() {
         gl.enable(gl.DEPTH_TEST);
         gl.useProgram(program);
         gl.uniformMatrix4fv(uMvp, false, m);
+        if (settings.grid && grid.length > 0) {
+          gl.uniform1f(uRound, 0);
+          positions(buffers.grid);
+          uniformColor(gridColor());
+          gl.drawArrays(gl.LINES, 0, grid.length / 3);
+        }
         if (labels.length > 0) {
           positions(buffers.points);
           gl.bindBuffer(gl.ARRAY_BUFFER, buffers.colors);
@@ -307,19 +264,23 @@ std::string_view HtmlReportScript() {
           gl.uniform1f(uRound, settings.pointSize * dpr >= 3 ? 1 : 0);
           ranges.forEach(function (r) { if (visible[r[0]]) gl.drawArrays(gl.POINTS, r[1], r[2]); });
         }
-        gl.uniform1f(uRound, 0);
-        if (settings.trajectory && trajectory.length >= 6) {
-          positions(buffers.trajectory);
-          uniformColor(TRAJECTORY_COLOR);
-          gl.drawArrays(gl.LINE_STRIP, 0, trajectory.length / 3);
-        }
+        // Keyframes under the trajectory, so that many of them do not hide it.
         gl.uniform1f(uRound, 1);
         if (settings.keyframes && keyframes.length > 0) {
           positions(buffers.keyframes);
           uniformColor(KEYFRAME_COLOR);
-          gl.uniform1f(uSize, Math.min(maxSize, (settings.pointSize + 2) * dpr));
+          gl.uniform1f(uSize, Math.min(maxSize, (settings.pointSize + 1) * dpr));
           gl.drawArrays(gl.POINTS, 0, keyframes.length / 3);
         }
+        gl.uniform1f(uRound, 0);
+        if (settings.trajectory && trajectory.length >= 6) {
+          gl.disable(gl.DEPTH_TEST);
+          positions(buffers.trajectory);
+          uniformColor(TRAJECTORY_COLOR);
+          gl.drawArrays(gl.LINE_STRIP, 0, trajectory.length / 3);
+          gl.enable(gl.DEPTH_TEST);
+        }
+        gl.uniform1f(uRound, 1);
         if (settings.landmarks && landmarks.length > 0) {
           positions(buffers.landmarks);
           uniformColor(LANDMARK_COLOR);
@@ -369,6 +330,19 @@ std::string_view HtmlReportScript() {
           }
         });
         context.putImageData(image, 0, 0);
+        if (settings.grid) {
+          context.strokeStyle = css(gridColor());
+          context.lineWidth = dpr;
+          context.beginPath();
+          for (let i = 0; i + 5 < grid.length; i += 6) {
+            const a = project(m, [grid[i], grid[i + 1], grid[i + 2]], w, h);
+            const b = project(m, [grid[i + 3], grid[i + 4], grid[i + 5]], w, h);
+            if (!a || !b || a[2] <= near || b[2] <= near) continue;
+            context.moveTo(a[0], a[1]);
+            context.lineTo(b[0], b[1]);
+          }
+          context.stroke();
+        }
         function markers(array, color, markerSize) {
           context.fillStyle = css(color);
           for (let i = 0; i + 2 < array.length; i += 3) {
@@ -376,6 +350,7 @@ std::string_view HtmlReportScript() {
             if (p && p[2] > near) context.fillRect(p[0] - markerSize / 2, p[1] - markerSize / 2, markerSize, markerSize);
           }
         }
+        if (settings.keyframes) markers(keyframes, KEYFRAME_COLOR, (settings.pointSize + 1) * dpr);
         if (settings.trajectory && trajectory.length >= 6) {
           context.strokeStyle = css(TRAJECTORY_COLOR);
           context.lineWidth = dpr;
@@ -389,7 +364,6 @@ std::string_view HtmlReportScript() {
           }
           context.stroke();
         }
-        if (settings.keyframes) markers(keyframes, KEYFRAME_COLOR, (settings.pointSize + 2) * dpr);
         if (settings.landmarks) markers(landmarkPositions, LANDMARK_COLOR, 10 * dpr);
       }
     };
@@ -420,22 +394,65 @@ std::string_view HtmlReportScript() {
     const m = viewProjection(w / h);
     renderer.draw(m, w, h, dpr);
     overlayContext.clearRect(0, 0, w, h);
+    drawNorthArrow(m, w, h, dpr);
     if (settings.landmarks && landmarks.length > 0) {
       overlayContext.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
       overlayContext.lineWidth = 3 * dpr;
       overlayContext.strokeStyle = settings.light ? 'rgba(255,255,255,0.9)' : 'rgba(0,0,0,0.8)';
       overlayContext.fillStyle = settings.light ? '#000' : '#fff';
       const near = clipRange().near;
+      // Names next to their markers without overlapping each other: the first free of eight spots, else none.
+      const placed = [];
+      const lineHeight = 14 * dpr, gap = 7 * dpr;
+      function free(r) {
+        return placed.every(function (q) {
+          return r.x + r.w <= q.x || q.x + q.w <= r.x || r.y + r.h <= q.y || q.y + q.h <= r.y;
+        });
+      }
       landmarks.forEach(function (l) {
         const p = project(m, l.p, w, h);
         if (!p || p[2] <= near || p[0] < 0 || p[1] < 0 || p[0] > w || p[1] > h) return;
-        overlayContext.strokeText(l.name, p[0] + 8 * dpr, p[1] - 6 * dpr);
-        overlayContext.fillText(l.name, p[0] + 8 * dpr, p[1] - 6 * dpr);
+        const tw = overlayContext.measureText(l.name).width;
+        const spots = [[gap, -gap - lineHeight], [gap, gap], [-gap - tw, -gap - lineHeight], [-gap - tw, gap],
+                       [-tw / 2, -2 * gap - lineHeight], [-tw / 2, 2 * gap], [gap, -lineHeight / 2],
+                       [-gap - tw, -lineHeight / 2]];
+        for (let i = 0; i < spots.length; ++i) {
+          const r = { x: p[0] + spots[i][0], y: p[1] + spots[i][1], w: tw, h: lineHeight };
+          if (!free(r)) continue;
+          placed.push(r);
+          overlayContext.strokeText(l.name, r.x, r.y + lineHeight - 3 * dpr);
+          overlayContext.fillText(l.name, r.x, r.y + lineHeight - 3 * dpr);
+          return;
+        }
       });
     }
-    status.textContent = shownCount().toLocaleString() + ' of ' + labels.length.toLocaleString() + ' points, ' +
+    status.textContent = (settings.grid ? gridLabel() + ' \u00b7 ' : '') + shownCount().toLocaleString() + ' of ' + labels.length.toLocaleString() + ' points, ' +
         (trajectory.length / 3) + ' poses, ' + (keyframes.length / 3) + ' keyframes, ' +
         landmarks.length + ' landmarks \u00b7 ' + (renderer.name === 'webgl' ? 'WebGL' : '2D canvas');
+  }
+  // North (ENU) or the first camera's forward direction (level map frame), as it points on the screen now.
+  function drawNorthArrow(m, w, h, dpr) {
+    const a = project(m, camera.target, w, h);
+    const b = project(m, [camera.target[0], camera.target[1] + 0.1 * radius, camera.target[2]], w, h);
+    if (!a || !b) return;
+    const dx = b[0] - a[0], dy = b[1] - a[1], n = Math.hypot(dx, dy);
+    if (n < 1e-6) return;
+    const ux = dx / n, uy = dy / n, c = [28 * dpr, 36 * dpr], len = 16 * dpr;
+    const ctx = overlayContext;
+    ctx.strokeStyle = settings.light ? '#222' : '#eee';
+    ctx.fillStyle = ctx.strokeStyle;
+    ctx.lineWidth = 2 * dpr;
+    ctx.beginPath();
+    ctx.moveTo(c[0] - ux * len, c[1] - uy * len);
+    ctx.lineTo(c[0] + ux * len, c[1] + uy * len);
+    ctx.stroke();
+    ctx.beginPath();
+    ctx.moveTo(c[0] + ux * (len + 6 * dpr), c[1] + uy * (len + 6 * dpr));
+    ctx.lineTo(c[0] + ux * len - uy * 5 * dpr, c[1] + uy * len + ux * 5 * dpr);
+    ctx.lineTo(c[0] + ux * len + uy * 5 * dpr, c[1] + uy * len - ux * 5 * dpr);
+    ctx.fill();
+    ctx.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
+    ctx.fillText(northUp ? 'N' : 'fwd', c[0] + ux * (len + 10 * dpr) - 4 * dpr, c[1] + uy * (len + 10 * dpr) + 4 * dpr);
   }
   let pending = false;
   function requestDraw() {
@@ -511,20 +528,29 @@ std::string_view HtmlReportScript() {
     requestDraw();
   });
   on('view-top', 'click', function () {
-    camera.pitch = 1.55;
-    camera.yaw = -Math.PI / 2;
+    camera.pitch = TOP_PITCH;
+    camera.yaw = TOP_YAW;
     requestDraw();
   });
+  on('view-oblique', 'click', function () {
+    camera.pitch = 0.75;
+    camera.yaw = TOP_YAW - 0.6;
+    requestDraw();
+  });
+  function applyBackground() {
+    wrap.classList.toggle('light', settings.light);
+    wrap.style.background = settings.light ? '#f4f6f8' : '';
+  }
+  applyBackground();
   on('view-background', 'click', function () {
     settings.light = !settings.light;
-    wrap.classList.toggle('light', settings.light);
-    wrap.style.background = settings.light ? '#fff' : '';
+    applyBackground();
     requestDraw();
   });
   const sizeSlider = document.getElementById('view-point-size');
   if (sizeSlider) sizeSlider.value = String(settings.pointSize);
   on('view-point-size', 'input', function (e) { settings.pointSize = parseFloat(e.target.value) || 2; requestDraw(); });
-  ['trajectory', 'keyframes', 'landmarks'].forEach(function (what) {
+  ['trajectory', 'keyframes', 'landmarks', 'grid'].forEach(function (what) {
     on('show-' + what, 'change', function (e) { settings[what] = e.target.checked; requestDraw(); });
   });
   const legend = document.querySelector('#legend tbody');
@@ -575,7 +601,3 @@ std::string_view HtmlReportScript() {
                            shown: shownCount };
   draw();
 })();
-)JS";
-}
-
-}  // namespace semslam

@@ -1,0 +1,209 @@
+// semslam.open_sequence and semslam.System: feed frames to SLAM from Python.
+
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "bindings.h"
+#include "semslam/io/sequence.h"
+#include "semslam/io/trajectory_io.h"
+#include "semslam/semantics/segmenter.h"
+#include "semslam/system/slam_config.h"
+#include "semslam/system/slam_system.h"
+
+namespace semslam::python {
+
+namespace {
+
+py::dict CameraDict(const PinholeCamera& camera, const std::optional<StereoRig>& stereo) {
+  py::dict d;
+  d["width"] = camera.width;
+  d["height"] = camera.height;
+  d["fx"] = camera.fx;
+  d["fy"] = camera.fy;
+  d["cx"] = camera.cx;
+  d["cy"] = camera.cy;
+  if (stereo) d["baseline"] = stereo->baseline;
+  return d;
+}
+
+PinholeCamera CameraFromDict(const py::dict& d) {
+  PinholeCamera camera;
+  try {
+    camera.width = d["width"].cast<int>();
+    camera.height = d["height"].cast<int>();
+    camera.fx = d["fx"].cast<double>();
+    camera.fy = d["fy"].cast<double>();
+    camera.cx = d["cx"].cast<double>();
+    camera.cy = d["cy"].cast<double>();
+  } catch (const py::error_already_set&) {
+    throw py::value_error("camera: a dict with width, height, fx, fy, cx, cy (and baseline for stereo)");
+  }
+  camera.Check();
+  return camera;
+}
+
+py::array_t<std::uint8_t> ImageArray(const cv::Mat& image) {
+  cv::Mat grey = image.isContinuous() ? image : image.clone();
+  py::array_t<std::uint8_t> out({grey.rows, grey.cols});
+  std::memcpy(out.mutable_data(), grey.data, static_cast<size_t>(grey.rows) * static_cast<size_t>(grey.cols));
+  return out;
+}
+
+// A grey uint8 image (H x W) from NumPy, copied (tracking keeps images for later segmentation).
+cv::Mat MatFromArray(const py::array& array) {
+  if (array.size() == 0) return {};
+  const auto image = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(array);
+  if (!image || image.ndim() != 2) throw py::value_error("image: a 2-D uint8 (grey) array");
+  return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)), CV_8UC1,
+                 const_cast<std::uint8_t*>(image.data()))
+      .clone();
+}
+
+class Sequence {
+ public:
+  explicit Sequence(const std::filesystem::path& path) : sequence_(OpenSequence(path)) {}
+  size_t size() const { return sequence_->size(); }
+  double Timestamp(size_t i) const {
+    Check(i);
+    return sequence_->Timestamp(i);
+  }
+  py::array_t<std::uint8_t> Image(size_t i, int camera) const {
+    Check(i);
+    return ImageArray(sequence_->LoadImage(i, camera));
+  }
+  py::dict Camera() const { return CameraDict(sequence_->camera(), sequence_->stereo()); }
+  std::string Name() const { return sequence_->name(); }
+  py::object GroundTruth() const {
+    const auto truth = sequence_->GroundTruth();
+    if (!truth) return py::none();
+    std::vector<Rigid3d> poses;
+    py::array_t<double> stamps(static_cast<py::ssize_t>(truth->size()));
+    auto s = stamps.mutable_unchecked<1>();
+    for (size_t i = 0; i < truth->size(); ++i) {
+      s(static_cast<py::ssize_t>(i)) = (*truth)[i].timestamp;
+      poses.push_back((*truth)[i].world_from_camera);
+    }
+    return py::make_tuple(stamps, PosesArray(poses));
+  }
+
+ private:
+  void Check(size_t i) const {
+    if (i >= sequence_->size()) throw py::index_error("frame " + std::to_string(i) + " is outside the sequence");
+  }
+  std::unique_ptr<ImageSequence> sequence_;
+};
+
+class PySystem {
+ public:
+  PySystem(const py::dict& camera, const std::string& mode, const std::string& pacing,
+           std::optional<std::filesystem::path> config, std::optional<std::filesystem::path> vocabulary,
+           const std::string& segmenter, std::optional<std::filesystem::path> labels) {
+    SlamOptions options;
+    const auto sensor = ParseSensorMode(mode);
+    const auto parsed_pacing = ParsePacing(pacing);
+    if (!sensor) throw py::value_error("mode: 'mono' or 'stereo'");
+    if (!parsed_pacing) throw py::value_error("pacing: 'fast', 'realtime' or 'synchronous'");
+    options.mode = *sensor;
+    if (config) ApplySlamConfig(*config, &options);
+    options.pacing = *parsed_pacing;
+    if (vocabulary) options.vocabulary = *vocabulary;
+    const PinholeCamera pinhole = CameraFromDict(camera);
+    std::optional<StereoRig> rig;
+    if (camera.contains("baseline")) rig = StereoRig{pinhole, camera["baseline"].cast<double>()};
+    system_ = std::make_unique<SlamSystem>(options, pinhole, rig);
+    if (segmenter != "none") {
+      SegmenterContext context;
+      if (labels) context.truth_label_dir = *labels;
+      system_->EnableSegmentation(MakeSegmenter(segmenter, context));
+    }
+  }
+
+  py::dict Process(const py::array& image, double timestamp, const py::object& right) {
+    const cv::Mat left = MatFromArray(image);
+    const cv::Mat right_image = right.is_none() ? cv::Mat() : MatFromArray(right.cast<py::array>());
+    TrackingResult result;
+    {
+      py::gil_scoped_release release;  // tracking takes a while; the mapping threads never need Python
+      result = system_->ProcessFrame(next_frame_++, timestamp, left, right_image);
+    }
+    py::dict d;
+    d["state"] = std::string(ToString(result.state));
+    d["pose"] = result.camera_from_world ? py::object(PoseArray(result.camera_from_world->Inverse())) : py::none();
+    d["matched"] = result.matched_points;
+    d["new_keyframe"] = result.new_keyframe;
+    d["initialized"] = result.initialized_now;
+    d["relocalized"] = result.relocalized;
+    d["milliseconds"] = result.milliseconds;
+    return d;
+  }
+
+  void Finish() {
+    py::gil_scoped_release release;
+    system_->Finish();
+  }
+
+  py::tuple Trajectory() const {
+    std::vector<Rigid3d> poses;
+    std::vector<double> stamps;
+    for (const StampedPose& p : system_->FrameTrajectory()) {
+      stamps.push_back(p.timestamp);
+      poses.push_back(p.world_from_camera);
+    }
+    return py::make_tuple(py::array_t<double>(static_cast<py::ssize_t>(stamps.size()), stamps.data()),
+                          PosesArray(poses));
+  }
+
+  py::dict Statistics() const {
+    const SlamStatistics s = system_->Statistics();
+    py::dict d;
+    d["frames"] = s.frames;
+    d["tracked"] = s.tracked;
+    d["keyframes"] = s.keyframes;
+    d["map_points"] = s.map_points;
+    d["loops"] = s.loops;
+    d["relocalizations"] = s.relocalizations;
+    d["resets"] = s.resets;
+    return d;
+  }
+
+  void SaveMap(const std::filesystem::path& path) const { system_->SaveMap(path); }
+
+ private:
+  std::unique_ptr<SlamSystem> system_;
+  std::uint64_t next_frame_ = 0;
+};
+
+}  // namespace
+
+void AddSystemBindings(py::module_& m) {
+  py::class_<Sequence>(m, "Sequence", "An image sequence semslam reads (KITTI, synthetic city, image folder)")
+      .def("__len__", &Sequence::size)
+      .def("timestamp", &Sequence::Timestamp, py::arg("frame"))
+      .def("image", &Sequence::Image, py::arg("frame"), py::arg("camera") = 0, "(H, W) uint8 grey image")
+      .def_property_readonly("camera", &Sequence::Camera)
+      .def_property_readonly("name", &Sequence::Name)
+      .def("ground_truth", &Sequence::GroundTruth, "(timestamps, poses) or None");
+  m.def(
+      "open_sequence", [](const std::filesystem::path& path) { return Sequence(path); }, py::arg("path"),
+      "Opens a KITTI odometry sequence, a KITTI raw drive, the synthetic city or an image folder.");
+
+  py::class_<PySystem>(m, "System",
+                       "The SLAM system fed frame by frame. process() returns the frame's pose (world_from_camera, "
+                       "4x4, or None while not tracking) and tracking state.")
+      .def(py::init<const py::dict&, const std::string&, const std::string&, std::optional<std::filesystem::path>,
+                    std::optional<std::filesystem::path>, const std::string&, std::optional<std::filesystem::path>>(),
+           py::arg("camera"), py::arg("mode") = "mono", py::arg("pacing") = "synchronous",
+           py::arg("config") = py::none(), py::arg("vocabulary") = py::none(), py::arg("segmenter") = "none",
+           py::arg("labels") = py::none())
+      .def("process", &PySystem::Process, py::arg("image"), py::arg("timestamp"), py::arg("right") = py::none())
+      .def("finish", &PySystem::Finish, "Lets mapping and loop closing finish and runs the final optimization")
+      .def("trajectory", &PySystem::Trajectory, "(timestamps, poses) of every tracked frame")
+      .def("statistics", &PySystem::Statistics)
+      .def("save_map", &PySystem::SaveMap, py::arg("path"));
+}
+
+}  // namespace semslam::python

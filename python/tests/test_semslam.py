@@ -1,0 +1,142 @@
+#!/usr/bin/python3
+"""Tests of the Python module `semslam` (run by CTest with Debian's /usr/bin/python3).
+
+Makes a small synthetic city with the semslam binary ($SEMSLAM_BIN), maps it once with `semslam run` (stereo, GPS,
+landmarks, a segmenter) and once from Python through semslam.System, and checks what the module reads."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+
+import semslam
+
+BIN = os.environ.get("SEMSLAM_BIN", "semslam")
+FRAMES = 150  # the city turns after ~120 frames: GPS along one straight line would not fix the map's heading
+
+
+def run(*args):
+    result = subprocess.run([BIN, *args], capture_output=True, text=True)
+    if result.returncode != 0:
+        raise RuntimeError(f"semslam {' '.join(args)} failed ({result.returncode}): {result.stderr[-2000:]}")
+    return result
+
+
+class SemslamModuleTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        base = os.environ.get("SEMSLAM_TEST_TMP")
+        if base:
+            os.makedirs(base, exist_ok=True)
+        cls.tmp = tempfile.mkdtemp(prefix="python_semslam_", dir=base)
+        cls.data = os.path.join(cls.tmp, "city")
+        cls.out = os.path.join(cls.tmp, "run")
+        run("synth", "--out", cls.data, "--frames", str(FRAMES), "--seed", "1", "-q")
+        cls.sequence = os.path.join(cls.data, "sequences", "00")
+        run("run", "--sequence", cls.sequence, "--out", cls.out, "--mode", "stereo", "--pacing", "synchronous",
+            "--gps", os.path.join(cls.data, "oxts"), "--gps-every", "10", "--landmarks",
+            os.path.join(cls.data, "landmarks.csv"), "--segmenter", "truth-noisy:0.25", "-q")
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp, ignore_errors=True)
+
+    def test_version(self):
+        self.assertRegex(semslam.__version__, r"^\d+\.\d+\.\d+$")
+        self.assertTrue(semslam.commit)
+
+    def test_load_map_gives_numpy_arrays_of_the_right_shapes(self):
+        m = semslam.load_map(os.path.join(self.out, "map.semslam"))
+        run_json = json.load(open(os.path.join(self.out, "run.json")))
+        n = m.points.shape[0]
+        self.assertEqual(n, run_json["points"])
+        self.assertEqual(m.points.shape, (n, 3))
+        self.assertEqual(m.points.dtype, np.float64)
+        self.assertEqual(m.labels.shape, (n,))
+        self.assertEqual(m.confidence.shape, (n,))
+        self.assertTrue(np.all(np.isfinite(m.points)))
+        self.assertTrue(np.all((m.labels >= -1) & (m.labels < len(m.class_names))))
+        self.assertGreater(np.count_nonzero(m.labels >= 0), n // 2)  # segmented keyframes labeled the points
+        self.assertTrue(np.all((m.confidence >= 0) & (m.confidence <= 1)))
+        k = m.keyframe_poses.shape[0]
+        self.assertEqual(k, run_json["keyframes"])
+        self.assertEqual(m.keyframe_poses.shape, (k, 4, 4))
+        rotations = m.keyframe_poses[:, :3, :3]
+        np.testing.assert_allclose(rotations @ rotations.transpose(0, 2, 1), np.broadcast_to(np.eye(3), (k, 3, 3)),
+                                   atol=1e-9)
+        np.testing.assert_allclose(m.keyframe_poses[:, 3, :], np.broadcast_to([0, 0, 0, 1], (k, 4)))
+        # Keyframe poses are those of keyframes.tum.
+        stamps, poses = semslam.read_trajectory(os.path.join(self.out, "keyframes.tum"))
+        np.testing.assert_allclose(np.sort(m.keyframe_timestamps), stamps, atol=1e-6)
+        # GPS and landmarks: placed landmarks and the topological map.
+        self.assertGreater(len(m.landmarks), 0)
+        self.assertIn("name", m.landmarks[0])
+        self.assertIsNotNone(m.topology)
+        self.assertGreater(len(m.topology["nodes"]), 0)
+        self.assertIn("edges", m.topology)
+        self.assertIsNotNone(m.georeference)
+
+    def test_read_trajectory_and_evaluate(self):
+        stamps, poses = semslam.read_trajectory(os.path.join(self.out, "trajectory.tum"))
+        self.assertEqual(poses.shape, (len(stamps), 4, 4))
+        kitti_stamps, kitti = semslam.read_trajectory(os.path.join(self.out, "trajectory.kitti"))
+        self.assertEqual(kitti.shape, (FRAMES, 4, 4))  # one line per frame
+        truth = os.path.join(self.data, "poses", "00.txt")
+        times = os.path.join(self.sequence, "times.txt")
+        from_files = semslam.evaluate(os.path.join(self.out, "trajectory.tum"), truth, align="se3", times=times)
+        run_json = json.load(open(os.path.join(self.out, "run.json")))
+        self.assertAlmostEqual(from_files["ate_rmse"], run_json["ate_rmse"], places=4)
+        self.assertLess(from_files["ate_rmse"], 0.5)
+        # Arrays evaluate the same as files.
+        truth_stamps, truth_poses = semslam.read_trajectory(truth, times=times)
+        from_arrays = semslam.evaluate((stamps, poses), (truth_stamps, truth_poses), align="se3")
+        self.assertAlmostEqual(from_arrays["ate_rmse"], from_files["ate_rmse"], places=9)
+        # A KITTI file with a frame missing is refused with the reason.
+        with open(os.path.join(self.out, "trajectory.kitti")) as f:
+            lines = f.readlines()
+        short = os.path.join(self.tmp, "short.kitti")
+        with open(short, "w") as f:
+            f.writelines(lines[:1] + lines[2:])
+        with self.assertRaisesRegex(ValueError, "one line per frame"):
+            semslam.evaluate(short, truth)
+
+    def test_system_fed_from_python_tracks_the_city(self):
+        sequence = semslam.open_sequence(self.sequence)
+        self.assertEqual(len(sequence), FRAMES)
+        camera = sequence.camera
+        self.assertIn("baseline", camera)
+        system = semslam.System(camera, mode="stereo")
+        states = []
+        for i in range(30):
+            result = system.process(sequence.image(i, 0), sequence.timestamp(i), right=sequence.image(i, 1))
+            states.append(result["state"])
+            if result["pose"] is not None:
+                self.assertEqual(result["pose"].shape, (4, 4))
+        system.finish()
+        self.assertEqual(states.count("ok"), 30)
+        stamps, poses = system.trajectory()
+        self.assertEqual(poses.shape, (30, 4, 4))
+        truth_stamps, truth_poses = sequence.ground_truth()
+        errors = semslam.evaluate((stamps, poses), (truth_stamps, truth_poses), align="se3")
+        self.assertLess(errors["ate_rmse"], 0.3)
+        self.assertEqual(system.statistics()["frames"], 30)
+
+    def test_bad_inputs_raise_value_error_naming_the_file(self):
+        bad = os.path.join(self.tmp, "bad.tum")
+        with open(bad, "w") as f:
+            f.write("0 0 0 0 0 0 0 1\n1 0 0\n")
+        with self.assertRaisesRegex(ValueError, "bad.tum:2"):
+            semslam.read_trajectory(bad)
+        with self.assertRaises(ValueError):
+            semslam.load_map(bad)
+        with self.assertRaises(ValueError):
+            semslam.System({"width": 10}, mode="mono")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)

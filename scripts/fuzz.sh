@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Runs every libFuzzer target of fuzz/ for a bounded time (FUZZ_SECONDS each, default 5) from its seed corpus
+# in fuzz/corpus/NAME (copied: the repository's corpus is not changed), and prints the executions per target.
+# The targets are built by the asan preset (or `cmake --build --preset fuzz`). Exits non-zero when a target
+# finds an input that crashes a reader or escapes it with anything but semslam's own input errors; the input
+# is printed (hex) and kept in $FUZZ_ARTIFACTS (default: a temporary folder, printed).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds="${FUZZ_SECONDS:-5}"
+build="${FUZZ_BUILD_DIR:-build/asan/fuzz}"
+work="$(mktemp -d)"
+artifacts="${FUZZ_ARTIFACTS:-$work/artifacts}"
+mkdir -p "$artifacts"
+trap 'rm -rf "$work/corpus"' EXIT
+failed=0 total=0
+for corpus in fuzz/corpus/*/; do
+  name="$(basename "$corpus")"
+  target="$build/fuzz_$name"
+  if [ ! -x "$target" ]; then
+    echo "fuzz: $target is not built (cmake --build --preset fuzz)" >&2
+    exit 1
+  fi
+  mkdir -p "$work/corpus/$name"
+  cp "$corpus"* "$work/corpus/$name/"
+  log="$work/$name.log"
+  if "$target" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+       -artifact_prefix="$artifacts/$name-" "$work/corpus/$name" >"$log" 2>&1; then
+    runs="$(grep -oE 'stat::number_of_executed_units: *[0-9]+' "$log" | grep -oE '[0-9]+$' || echo '?')"
+    corpus_size="$(ls "$work/corpus/$name" | wc -l)"
+    echo "fuzz_$name: $runs executions in $seconds s, corpus $(ls "$corpus" | wc -l) -> $corpus_size inputs, no failure"
+    total=$((total + ${runs//\?/0}))
+  else
+    failed=1
+    echo "fuzz_$name: FAILED" >&2
+    grep -vE '^(#[0-9]+|INFO:)' "$log" | tail -60 >&2
+    for input in "$artifacts/$name-"*; do
+      [ -f "$input" ] || continue
+      echo "input $input:" >&2
+      od -A d -c "$input" | head -16 >&2
+    done
+  fi
+done
+echo "fuzz: $total executions in all; artifacts in $artifacts"
+exit "$failed"

@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""Resident memory against frames from a run's tracking.csv (column rss_mib): a table per 1000 frames, the growth
+per 1000 frames over the second half of the run, and an SVG plot (no plotting library needed)."""
+import argparse
+import csv
+import json
+
+
+def read_rows(path):
+    rows = []
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            if not row.get("rss_mib"):
+                continue
+            rows.append({
+                "frame": int(row["frame"]),
+                "rss": float(row["rss_mib"]),
+                "keyframes": int(row["keyframes"]) if row.get("keyframes") else None,
+                "points": int(row["map_points"]) if row.get("map_points") else None,
+            })
+    return rows
+
+
+def slope_per_1000(rows):
+    """Least-squares slope of RSS against frame, MiB per 1000 frames."""
+    n = len(rows)
+    if n < 2:
+        return 0.0
+    mx = sum(r["frame"] for r in rows) / n
+    my = sum(r["rss"] for r in rows) / n
+    sxx = sum((r["frame"] - mx) ** 2 for r in rows)
+    sxy = sum((r["frame"] - mx) * (r["rss"] - my) for r in rows)
+    return 1000.0 * sxy / sxx if sxx > 0 else 0.0
+
+
+def svg_plot(rows, path, title):
+    width, height, left, right, top, bottom = 760, 360, 70, 70, 30, 50
+    frames = [r["frame"] for r in rows]
+    x0, x1 = min(frames), max(frames)
+    rss_max = max(r["rss"] for r in rows) * 1.1
+    kf = [r["keyframes"] or 0 for r in rows]
+    kf_max = max(max(kf), 1) * 1.1
+
+    def sx(f):
+        return left + (f - x0) / max(x1 - x0, 1) * (width - left - right)
+
+    def sy(v, vmax):
+        return height - bottom - v / vmax * (height - top - bottom)
+
+    step = max(1, len(rows) // 1500)
+    rss_line = " ".join(f"{sx(r['frame']):.1f},{sy(r['rss'], rss_max):.1f}" for r in rows[::step])
+    kf_line = " ".join(f"{sx(r['frame']):.1f},{sy(k, kf_max):.1f}" for r, k in list(zip(rows, kf))[::step])
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" '
+           f'font-size="12">', f'<rect width="{width}" height="{height}" fill="white"/>',
+           f'<text x="{width / 2}" y="18" text-anchor="middle" font-size="14">{title}</text>',
+           f'<polyline fill="none" stroke="#1f77b4" stroke-width="1.5" points="{rss_line}"/>',
+           f'<polyline fill="none" stroke="#ff7f0e" stroke-width="1" stroke-dasharray="4 2" points="{kf_line}"/>',
+           f'<line x1="{left}" y1="{height - bottom}" x2="{width - right}" y2="{height - bottom}" stroke="black"/>',
+           f'<line x1="{left}" y1="{top}" x2="{left}" y2="{height - bottom}" stroke="black"/>',
+           f'<line x1="{width - right}" y1="{top}" x2="{width - right}" y2="{height - bottom}" stroke="black"/>']
+    for i in range(6):
+        f = x0 + (x1 - x0) * i / 5
+        out.append(f'<text x="{sx(f):.1f}" y="{height - bottom + 16}" text-anchor="middle">{f:.0f}</text>')
+        v = rss_max * i / 5
+        out.append(f'<text x="{left - 6}" y="{sy(v, rss_max) + 4:.1f}" text-anchor="end" fill="#1f77b4">{v:.0f}</text>')
+        k = kf_max * i / 5
+        out.append(f'<text x="{width - right + 6}" y="{sy(k, kf_max) + 4:.1f}" fill="#ff7f0e">{k:.0f}</text>')
+    out.append(f'<text x="{width / 2}" y="{height - 12}" text-anchor="middle">frame</text>')
+    out.append(f'<text x="16" y="{height / 2}" transform="rotate(-90 16 {height / 2})" text-anchor="middle" '
+               f'fill="#1f77b4">resident memory (MiB)</text>')
+    out.append(f'<text x="{width - 14}" y="{height / 2}" transform="rotate(90 {width - 14} {height / 2})" '
+               f'text-anchor="middle" fill="#ff7f0e">keyframes in the map</text>')
+    out.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("tracking_csv")
+    parser.add_argument("--run-json")
+    parser.add_argument("--svg")
+    args = parser.parse_args()
+    rows = read_rows(args.tracking_csv)
+    if not rows:
+        raise SystemExit(f"{args.tracking_csv}: no rss_mib column or no rows")
+    print("frames          peak RSS MiB   keyframes   map points   (at the end of each 1000 frames)")
+    for start in range(0, rows[-1]["frame"] + 1, 1000):
+        bucket = [r for r in rows if start <= r["frame"] < start + 1000]
+        if not bucket:
+            continue
+        last = bucket[-1]
+        print(f"{start:5d}-{start + 999:5d}   {max(r['rss'] for r in bucket):12.1f}   {last['keyframes'] or 0:9d}   "
+              f"{last['points'] or 0:10d}")
+    half = rows[len(rows) // 2:]
+    print(f"growth over the second half: {slope_per_1000(half):.1f} MiB per 1000 frames; "
+          f"over the whole run: {slope_per_1000(rows):.1f}")
+    if args.run_json:
+        run = json.load(open(args.run_json))
+        print(f"run.json: peak_rss_mib {run.get('peak_rss_mib')}, keyframes {run.get('keyframes')}, "
+              f"points {run.get('points')}, loops {run.get('loops')}, tracked {run.get('tracked')}/{run.get('frames')}")
+    if args.svg:
+        svg_plot(rows, args.svg, f"semslam run over {rows[-1]['frame'] + 1} synthetic frames: memory and keyframes")
+        print(f"plot: {args.svg}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,559 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <initializer_list>
+
+#include "semslam/report/class_colors.h"
+#include "semslam/report/html_encoding.h"
+#include "semslam/report/html_report_internal.h"
+#include "semslam/semantics/class_table.h"
+
+namespace semslam::html_report {
+
+// ---------------------------------------------------------------------------------------------------------
+// Formatting.
+
+std::string Dash() { return "&mdash;"; }
+
+std::string GroupThousands(long long value) {
+  std::string digits = std::to_string(value < 0 ? -value : value);
+  std::string out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += "&#8239;";  // narrow no-break space
+    out += digits[i];
+  }
+  return value < 0 ? "-" + out : out;
+}
+
+// Milliseconds with about three significant digits.
+std::string FormatMs(double ms) {
+  if (ms >= 1000.0) return GroupThousands(std::llround(ms));
+  if (ms >= 100.0) return fmt::format("{:.0f}", ms);
+  if (ms >= 10.0) return fmt::format("{:.1f}", ms);
+  if (ms >= 1.0) return fmt::format("{:.2f}", ms);
+  return fmt::format("{:.3f}", ms);
+}
+
+std::string FormatHz(double ms) {
+  if (!(ms > 0.0)) return Dash();
+  const double hz = 1000.0 / ms;
+  if (hz >= 1000.0) return GroupThousands(std::llround(hz));
+  if (hz >= 100.0) return fmt::format("{:.0f}", hz);
+  if (hz >= 10.0) return fmt::format("{:.1f}", hz);
+  return fmt::format("{:.2f}", hz);
+}
+
+std::string FormatPercent(double fraction) { return fmt::format("{:.1f}&nbsp;%", 100.0 * fraction); }
+
+std::string FormatNumber(double value, int decimals) { return fmt::format("{:.{}f}", value, decimals); }
+
+std::string FormatMetres(double metres) {
+  if (std::abs(metres) >= 100.0) return fmt::format("{:.0f}&nbsp;m", metres);
+  if (std::abs(metres) >= 10.0) return fmt::format("{:.1f}&nbsp;m", metres);
+  return fmt::format("{:.2f}&nbsp;m", metres);
+}
+
+std::string Cell(const std::string& html, std::optional<double> sort_value) {
+  if (sort_value) return fmt::format("<td class=\"num\" data-v=\"{:.9g}\">{}</td>", *sort_value, html);
+  return "<td>" + html + "</td>";
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Sections.
+
+void AppendKeyValueTable(std::string& html, const std::string& caption, const std::vector<KeyValue>& rows) {
+  if (rows.empty()) return;
+  html += "<table class=\"kv\">\n";
+  if (!caption.empty()) html += "<caption>" + HtmlEscape(caption) + "</caption>\n";
+  for (const KeyValue& row : rows) {
+    html += "<tr><th scope=\"row\">" + HtmlEscape(row.key) + "</th><td>" + row.value_html + "</td></tr>\n";
+  }
+  html += "</table>\n";
+}
+
+void AppendSummary(Page& page, const ReportInputs& in) {
+  const fs::path run_json = in.run_dir / "run.json";
+  const JsonFields f(run_json);
+  const json& run = in.run;
+  page.Open("summary", "Summary");
+
+  std::vector<KeyValue> rows;
+  if (const auto sequence = f.String(run, "sequence", "sequence"))
+    rows.push_back({"Sequence", HtmlEscape(*sequence)});
+  if (const auto mode = f.String(run, "mode", "mode")) {
+    rows.push_back({"Mode", *mode == "mono" ? "monocular" : HtmlEscape(*mode)});
+  }
+  const auto frames = f.Integer(run, "frames", "frames");
+  const auto first_frame = f.Integer(run, "first_frame", "first_frame");
+  if (frames) {
+    std::string value = GroupThousands(*frames);
+    if (first_frame) value += fmt::format(" (frames {}&ndash;{})", *first_frame, *first_frame + *frames - 1);
+    rows.push_back({"Frames", value});
+  }
+  if (const auto tracked = f.Integer(run, "tracked", "tracked")) {
+    std::string value = GroupThousands(*tracked);
+    if (frames && *frames > 0) {
+      value += " (" + FormatPercent(static_cast<double>(*tracked) / static_cast<double>(*frames)) + ")";
+    }
+    rows.push_back({"Frames tracked", value});
+  }
+  if (const auto v = f.Integer(run, "keyframes", "keyframes"))
+    rows.push_back({"Keyframes", GroupThousands(*v)});
+  if (const auto v = f.Integer(run, "points", "points")) rows.push_back({"Map points", GroupThousands(*v)});
+  if (const auto v = f.Integer(run, "loops", "loops")) rows.push_back({"Loop closures", GroupThousands(*v)});
+  if (const auto v = f.Integer(run, "relocalizations", "relocalizations")) {
+    rows.push_back({"Relocalizations", GroupThousands(*v)});
+  }
+  if (const auto v = f.Integer(run, "resets", "resets"); v && *v > 0) {
+    rows.push_back({"Map resets", GroupThousands(*v)});
+  }
+  if (const auto seconds = f.Number(run, "seconds", "seconds")) {
+    std::string value = fmt::format("{:.1f}&nbsp;s", *seconds);
+    if (frames && *seconds > 0) value += fmt::format(" ({:.1f} frames/s overall)", *frames / *seconds);
+    rows.push_back({"Run time", value});
+  }
+  if (const auto v = f.Number(run, "peak_rss_mib", "peak_rss_mib")) {
+    rows.push_back({"Peak memory", fmt::format("{:.0f}&nbsp;MiB", *v)});
+  }
+  if (const auto ate = f.Number(run, "ate_rmse", "ate_rmse")) {
+    std::string value = FormatMetres(*ate) + " RMSE";
+    std::vector<std::string> details;
+    if (const auto alignment = f.String(run, "ate_alignment", "ate_alignment")) {
+      const std::string name = *alignment == "sim3" ? "Sim(3)" : *alignment == "se3" ? "SE(3)" : *alignment;
+      details.push_back(HtmlEscape(name) + " alignment");
+    }
+    if (const auto matched = f.Integer(run, "ate_matched", "ate_matched")) {
+      details.push_back(GroupThousands(*matched) + " poses");
+    }
+    if (const auto length = f.Number(run, "path_length_m", "path_length_m"); length && *length > 0) {
+      details.push_back(
+          fmt::format("{:.2f}&nbsp;% of the {} path", 100.0 * *ate / *length, FormatMetres(*length)));
+    }
+    if (!details.empty()) {
+      value += " (" + details[0];
+      for (size_t i = 1; i < details.size(); ++i) value += ", " + details[i];
+      value += ")";
+    }
+    rows.push_back({"Trajectory error (ATE)", value});
+  }
+  AppendKeyValueTable(page.body, "Run", rows);
+
+  // Semantics.
+  rows.clear();
+  const json* segmentation = f.Object(run, "segmentation", "segmentation");
+  if (segmentation != nullptr) {
+    if (const auto s = f.String(*segmentation, "segmenter", "segmentation.segmenter")) {
+      rows.push_back({"Segmenter", HtmlEscape(*s)});
+    }
+    if (const auto k = f.Integer(*segmentation, "segmented_keyframes", "segmentation.segmented_keyframes")) {
+      std::string value = GroupThousands(*k) + " keyframes";
+      if (const auto n = f.Integer(*segmentation, "segmented_frames", "segmentation.segmented_frames")) {
+        value += ", " + GroupThousands(*n) + " frames";
+      }
+      const auto skipped = f.Integer(*segmentation, "skipped", "segmentation.skipped").value_or(0);
+      const auto failed = f.Integer(*segmentation, "failed", "segmentation.failed").value_or(0);
+      if (skipped > 0 || failed > 0) value += fmt::format(" ({} skipped, {} failed)", skipped, failed);
+      rows.push_back({"Segmented", value});
+    }
+    if (const auto d = f.Bool(*segmentation, "exclude_dynamic", "segmentation.exclude_dynamic"); d && *d) {
+      rows.push_back({"Dynamic classes", "kept out of tracking"});
+    }
+  }
+  if (const auto accuracy = f.Number(run, "label_accuracy", "label_accuracy")) {
+    std::string value = FormatPercent(*accuracy) + " of the map points labeled right";
+    if (const json* evaluation = f.Object(run, "label_evaluation", "label_evaluation")) {
+      if (const json* fused = f.Object(*evaluation, "fused_points", "label_evaluation.fused_points")) {
+        if (const auto n = f.Integer(*fused, "evaluated", "label_evaluation.fused_points.evaluated")) {
+          value += " (" + GroupThousands(*n) + " evaluated)";
+        }
+      }
+      if (const json* single =
+              f.Object(*evaluation, "single_frame_keypoints", "label_evaluation.single_frame_keypoints")) {
+        if (const auto a =
+                f.Number(*single, "accuracy", "label_evaluation.single_frame_keypoints.accuracy")) {
+          value += "; single-frame segmentation at keypoints: " + FormatPercent(*a);
+        }
+      }
+    }
+    rows.push_back({"Label accuracy (fused)", value});
+  }
+  AppendKeyValueTable(page.body, "Semantics", rows);
+
+  // GPS, landmarks, topology, objects.
+  rows.clear();
+  if (const json* geo = f.Object(run, "geo", "geo")) {
+    const bool georeferenced = f.Bool(*geo, "georeferenced", "geo.georeferenced").value_or(false);
+    if (georeferenced) {
+      std::string value;
+      const auto fixes = f.Integer(*geo, "gps_fixes", "geo.gps_fixes");
+      const auto format = f.String(*geo, "gps_format", "geo.gps_format");
+      if (fixes) value = GroupThousands(*fixes) + " fixes";
+      if (format) value += " (" + HtmlEscape(*format) + ")";
+      const auto samples = f.Integer(*geo, "gps_samples", "geo.gps_samples");
+      const auto inliers = f.Integer(*geo, "gps_inliers", "geo.gps_inliers");
+      if (samples) {
+        value += fmt::format("; {} samples", GroupThousands(*samples));
+        if (inliers) value += fmt::format(", {} inliers", GroupThousands(*inliers));
+      }
+      rows.push_back({"GPS", value});
+      const bool fused = f.Bool(*geo, "fused", "geo.fused").value_or(false);
+      std::string alignment;
+      if (const auto r = f.Number(*geo, "single_sim3_rmse_m", "geo.single_sim3_rmse_m")) {
+        alignment = "single similarity: " + FormatMetres(*r) + " RMSE";
+      }
+      if (const auto r = f.Number(*geo, "fused_rmse_m", "geo.fused_rmse_m"); r && fused) {
+        alignment +=
+            (alignment.empty() ? "" : "; ") + std::string("pose-graph fusion: ") + FormatMetres(*r) + " RMSE";
+      }
+      if (const auto s = f.Number(*geo, "metres_per_map_unit", "geo.metres_per_map_unit")) {
+        alignment += fmt::format("{}{:.4g} m per map unit", alignment.empty() ? "" : "; ", *s);
+      }
+      if (!alignment.empty()) rows.push_back({"GPS alignment", alignment});
+    } else {
+      rows.push_back({"GPS", "not georeferenced"});
+    }
+    if (const auto n = f.Integer(*geo, "landmarks", "geo.landmarks"); n && *n > 0) {
+      std::string value = GroupThousands(*n);
+      if (const auto a = f.Integer(*geo, "landmarks_associated", "geo.landmarks_associated")) {
+        value += fmt::format(", {} associated with a keyframe", GroupThousands(*a));
+      }
+      rows.push_back({"Landmarks", value});
+    }
+    if (const auto n = f.Integer(*geo, "topology_nodes", "geo.topology_nodes"); n && *n > 0) {
+      std::string value = GroupThousands(*n) + " nodes";
+      const auto landmark_nodes = f.Integer(*geo, "topology_landmark_nodes", "geo.topology_landmark_nodes");
+      const auto turn_nodes = f.Integer(*geo, "topology_turn_nodes", "geo.topology_turn_nodes");
+      const auto revisited = f.Integer(*geo, "topology_revisited_nodes", "geo.topology_revisited_nodes");
+      if (landmark_nodes || turn_nodes) {
+        value += fmt::format(" ({} landmark, {} turn", landmark_nodes.value_or(0), turn_nodes.value_or(0));
+        if (revisited && *revisited > 0) value += fmt::format(", {} revisited", *revisited);
+        value += ")";
+      }
+      if (const auto e = f.Integer(*geo, "topology_edges", "geo.topology_edges")) {
+        value += ", " + GroupThousands(*e) + " edges";
+      }
+      rows.push_back({"Topological map", value});
+    }
+    if (const auto n = f.Integer(*geo, "objects", "geo.objects"); n && *n > 0) {
+      rows.push_back({"Objects", GroupThousands(*n)});
+    }
+  }
+  if (const json* evaluation = f.Object(run, "geo_evaluation", "geo_evaluation")) {
+    const auto median =
+        f.Number(*evaluation, "landmark_error_median_m", "geo_evaluation.landmark_error_median_m");
+    const auto max = f.Number(*evaluation, "landmark_error_max_m", "geo_evaluation.landmark_error_max_m");
+    if (median) {
+      std::string value = "median " + FormatMetres(*median);
+      if (max) value += ", max " + FormatMetres(*max);
+      const auto hmedian = f.Number(*evaluation, "landmark_error_horizontal_median_m",
+                                    "geo_evaluation.landmark_error_horizontal_median_m");
+      if (hmedian) value += " (horizontal median " + FormatMetres(*hmedian) + ")";
+      rows.push_back({"Landmark position error", value});
+    }
+    if (const auto r =
+            f.Number(*evaluation, "trajectory_ate_rmse_m", "geo_evaluation.trajectory_ate_rmse_m")) {
+      std::string value = FormatMetres(*r) + " RMSE";
+      if (const auto m =
+              f.Number(*evaluation, "trajectory_ate_max_m", "geo_evaluation.trajectory_ate_max_m")) {
+        value += ", max " + FormatMetres(*m);
+      }
+      rows.push_back({"Trajectory error in ENU (no alignment)", value});
+    }
+  }
+  AppendKeyValueTable(page.body, "GPS, landmarks and topology", rows);
+
+  // Per-class counts and accuracies.
+  const json* classes = f.Object(run, "classes", "classes");
+  if (classes != nullptr) {
+    const json* fused_classes = nullptr;
+    const json* single_classes = nullptr;
+    if (const json* evaluation = f.Object(run, "label_evaluation", "label_evaluation")) {
+      if (const json* fused = f.Object(*evaluation, "fused_points", "label_evaluation.fused_points")) {
+        fused_classes = f.Object(*fused, "per_class", "label_evaluation.fused_points.per_class");
+      }
+      if (const json* single =
+              f.Object(*evaluation, "single_frame_keypoints", "label_evaluation.single_frame_keypoints")) {
+        single_classes = f.Object(*single, "per_class", "label_evaluation.single_frame_keypoints.per_class");
+      }
+    }
+    // The classes present (at least 0.5 % of the labeled points, as the plots and the 3D view list them), in
+    // their display colours, commonest first; the rest and the unlabeled points in one "other" row.
+    long long total = 0;
+    std::array<long long, kNumClasses> class_counts{};
+    long long unlabeled = 0;
+    for (int id = 0; id <= kNumClasses; ++id) {
+      const std::string key = id < kNumClasses ? std::string(ClassKey(id)) : "unlabeled";
+      if (const auto n = f.Integer(*classes, key, "classes." + key); n && *n > 0) {
+        (id < kNumClasses ? class_counts[static_cast<size_t>(id)] : unlabeled) = *n;
+        total += *n;
+      }
+    }
+    const ClassDisplay display = MakeClassDisplay(class_counts);
+    std::vector<std::pair<int, long long>> counts;  // trainId (kNoLabel: other classes, unlabeled), count
+    long long other = unlabeled;
+    int other_classes = 0;
+    for (int id = 0; id < kNumClasses; ++id) {
+      const long long n = class_counts[static_cast<size_t>(id)];
+      if (display.listed[static_cast<size_t>(id)]) {
+        counts.emplace_back(id, n);
+      } else if (n > 0) {
+        other += n;
+        ++other_classes;
+      }
+    }
+    std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    if (other > 0) counts.emplace_back(kNoLabel, other);
+    if (!counts.empty()) {
+      page.body +=
+          "<table class=\"data sortable\">\n<caption>Map points per class</caption>\n<thead><tr>"
+          "<th>class</th><th class=\"num\">points</th><th class=\"num\">share</th>"
+          "<th class=\"num\">fused accuracy</th><th class=\"num\">single-frame "
+          "accuracy</th></tr></thead>\n<tbody>\n";
+      auto accuracy_cell = [&](const json* per_class, const std::string& key, const std::string& field) {
+        if (per_class == nullptr) return Cell(Dash(), -1.0);
+        const json* c = f.Object(*per_class, key, field + "." + key);
+        if (c == nullptr) return Cell(Dash(), -1.0);
+        const auto a = f.Number(*c, "accuracy", field + "." + key + ".accuracy");
+        if (!a) return Cell(Dash(), -1.0);
+        return Cell(FormatPercent(*a), *a);
+      };
+      for (const auto& [id, n] : counts) {
+        const Rgb color = id == kNoLabel ? display.other : display.color[static_cast<size_t>(id)];
+        const std::string key = id == kNoLabel ? "unlabeled" : std::string(ClassKey(id));
+        const std::string name =
+            id == kNoLabel ? (other_classes > 0 ? fmt::format("{} other classes, unlabeled", other_classes)
+                                                : std::string("unlabeled"))
+                           : std::string(ClassName(id));
+        page.body += fmt::format(
+            "<tr><td><span class=\"swatch\" style=\"background:rgb({},{},{})\"></span>{}</td>{}{}{}{}</tr>\n",
+            color.r, color.g, color.b, HtmlEscape(name), Cell(GroupThousands(n), static_cast<double>(n)),
+            Cell(FormatPercent(static_cast<double>(n) / static_cast<double>(total)),
+                 static_cast<double>(n) / static_cast<double>(total)),
+            accuracy_cell(fused_classes, key, "label_evaluation.fused_points.per_class"),
+            accuracy_cell(single_classes, key, "label_evaluation.single_frame_keypoints.per_class"));
+      }
+      page.body += "</tbody>\n</table>\n";
+    }
+  }
+  page.Close();
+}
+
+void AppendProvenance(Page& page, const ReportInputs& in) {
+  const JsonFields f(in.run_dir / "run.json");
+  const json* provenance = f.Object(in.run, "provenance", "provenance");
+  const json* config = f.Object(in.run, "config", "config");
+  if (provenance == nullptr && config == nullptr) return;
+  page.Open("provenance", "How this run was made");
+  std::vector<KeyValue> rows;
+  if (provenance != nullptr) {
+    if (const auto v = f.String(*provenance, "command_line", "provenance.command_line"))
+      rows.push_back({"Command", "<code>" + HtmlEscape(*v) + "</code>"});
+    std::string version = HtmlEscape(f.String(*provenance, "version", "provenance.version").value_or("unknown"));
+    if (const auto commit = f.String(*provenance, "commit", "provenance.commit"))
+      version += ", commit <code>" + HtmlEscape(*commit) + "</code>";
+    if (const auto type = f.String(*provenance, "build_type", "provenance.build_type"); type && !type->empty())
+      version += ", " + HtmlEscape(*type) + " build";
+    rows.push_back({"semslam", version});
+    if (const auto v = f.String(*provenance, "date", "provenance.date")) rows.push_back({"Date (UTC)", HtmlEscape(*v)});
+    if (const auto v = f.Integer(*provenance, "host_cores", "provenance.host_cores"))
+      rows.push_back({"Host", fmt::format("{} cores", *v)});
+  }
+  if (config != nullptr) {
+    if (const auto v = f.String(*config, "sequence", "config.sequence"))
+      rows.push_back({"Sequence", "<code>" + HtmlEscape(*v) + "</code>"});
+    if (const json* frames = f.Array(*config, "frames", "config.frames"); frames && frames->size() == 2 &&
+                                                                          (*frames)[0].is_number_integer() &&
+                                                                          (*frames)[1].is_number_integer()) {
+      rows.push_back({"Frames", fmt::format("{}:{}", (*frames)[0].get<long long>(), (*frames)[1].get<long long>())});
+    }
+    for (const auto& [key, label] : std::initializer_list<std::pair<const char*, const char*>>{
+             {"mode", "Mode"}, {"pacing", "Pacing"}, {"segmenter", "Segmenter"}, {"gps", "GPS log"},
+             {"landmarks", "Landmarks"}, {"map_in", "Starting map"}, {"vocabulary", "Vocabulary"}}) {
+      if (const auto v = f.String(*config, key, std::string("config.") + key); v && !v->empty())
+        rows.push_back({label, HtmlEscape(*v)});
+    }
+    if (const auto v = f.Integer(*config, "gps_every", "config.gps_every"); v && f.String(*config, "gps", "config.gps").value_or("") != "")
+      rows.push_back({"GPS sampling", fmt::format("one fix every {} frames", *v)});
+  }
+  AppendKeyValueTable(page.body, "", rows);
+  if (config != nullptr) {
+    if (const json* slam = f.Object(*config, "slam", "config.slam")) {
+      page.body += "<details><summary>Every SLAM option used (as <code>config.yaml</code>, which <code>--config</code> "
+                   "reads)</summary>\n<table class=\"kv\">\n";
+      for (const auto& [section, fields] : slam->items()) {
+        if (!fields.is_object()) continue;
+        for (const auto& [key, value] : fields.items()) {
+          page.body += "<tr><th scope=\"row\">" + HtmlEscape(section + "." + key) + "</th><td><code>" +
+                       HtmlEscape(value.dump()) + "</code></td></tr>\n";
+        }
+      }
+      page.body += "</table>\n</details>\n";
+    }
+  }
+  page.Close();
+}
+
+const ModuleTiming* FindModule(const std::vector<ModuleTiming>& modules, std::string_view name) {
+  for (const ModuleTiming& m : modules) {
+    if (m.name == name) return &m;
+  }
+  return nullptr;
+}
+
+void AppendTimeAnalysis(Page& page, const ReportInputs& in) {
+  const JsonFields f(in.run_dir / "run.json");
+  const std::vector<ModuleTiming> no_modules;
+  const std::vector<ModuleTiming>& modules = in.timing ? *in.timing : no_modules;
+
+  struct Row {
+    std::string what, detail;
+    std::optional<double> median_ms, p95_ms;
+    std::optional<long long> count;
+    std::string paper;
+    std::optional<double> mean_ms;  // the whole system's run seconds / frames
+  };
+  std::vector<Row> rows;
+  // Semantic segmentation: timed by the segmentation worker (run.json), or a "segmentation" timing entry.
+  {
+    Row row{"Semantic segmentation", "per segmented frame, on the segmentation worker", {}, {}, {},
+            "1.8 Hz (PSPNet-101)"};
+    if (const ModuleTiming* m = FindModule(modules, "segmentation")) {
+      row.median_ms = m->median_ms;
+      row.p95_ms = m->p95_ms;
+      row.mean_ms = m->mean_ms;
+      row.count = m->count;
+    } else if (const json* s = f.Object(in.run, "segmentation", "segmentation")) {
+      row.median_ms = f.Number(*s, "median_ms", "segmentation.median_ms");
+      if (row.median_ms) {
+        const auto frames = f.Integer(*s, "segmented_frames", "segmentation.segmented_frames").value_or(0);
+        const auto keyframes =
+            f.Integer(*s, "segmented_keyframes", "segmentation.segmented_keyframes").value_or(0);
+        row.count = std::max(frames, keyframes);
+      }
+    }
+    if (const json* s = f.Object(in.run, "segmentation", "segmentation")) {
+      if (const auto name = f.String(*s, "segmenter", "segmentation.segmenter")) {
+        const std::string first_word = name->substr(0, name->find(' '));
+        row.detail += "; " + first_word;
+      }
+    }
+    rows.push_back(row);
+  }
+  // A module's row from its timing entry (the first of `names` that was timed).
+  const auto module_row = [&](std::string what, std::string detail, std::string paper,
+                              std::initializer_list<std::string_view> names) {
+    Row row{std::move(what), std::move(detail), {}, {}, {}, std::move(paper)};
+    for (const std::string_view name : names) {
+      if (const ModuleTiming* m = FindModule(modules, name)) {
+        row.median_ms = m->median_ms;
+        row.p95_ms = m->p95_ms;
+        row.mean_ms = m->mean_ms;
+        row.count = m->count;
+        break;
+      }
+    }
+    rows.push_back(std::move(row));
+  };
+  module_row("Tracking", "per frame, tracking thread (ORB extraction, motion model, local map)",
+             "15.1 Hz (ORB-SLAM2)", {"tracking"});
+  module_row("Data association (label fusion)", "per segmented frame, labels fused into map points", "0.5 ms",
+             {"label_fusion"});
+  module_row("Local mapping", "per keyframe, local-mapping thread (triangulation, local BA, culling)", "",
+             {"local_mapping"});
+  module_row("Loop closing", "per keyframe, loop thread (detection; correction when a loop is found)", "",
+             {"loop_closing", "loop_detection"});
+  {
+    // The whole system per frame: the run loop's "frame" timing (loading, tracking, waiting for the camera's
+    // rate when pacing is realtime); the mean includes start-up, the final optimization and the outputs.
+    std::string pacing;
+    if (const json* config = f.Object(in.run, "config", "config")) {
+      pacing = f.String(*config, "pacing", "config.pacing").value_or("");
+    }
+    const std::string waits = pacing == "realtime"      ? ", waiting for the camera's rate (pacing realtime)"
+                              : pacing == "synchronous" ? ", waiting for mapping after each keyframe (pacing synchronous)"
+                              : pacing.empty()          ? ""
+                                                        : " (pacing " + pacing + ")";
+    Row row{"Whole system",
+            "per frame: loading, tracking" + waits + "; mean: run seconds / frames, start-up and outputs included",
+            {},
+            {},
+            {},
+            "&asymp;1.8 Hz (i7 + GTX 1080Ti)"};
+    if (const ModuleTiming* m = FindModule(modules, "frame")) {
+      row.median_ms = m->median_ms;
+      row.p95_ms = m->p95_ms;
+      row.count = m->count;
+    }
+    const auto frames = f.Integer(in.run, "frames", "frames");
+    const auto seconds = f.Number(in.run, "seconds", "seconds");
+    if (frames && seconds && *frames > 0 && *seconds > 0) {
+      row.mean_ms = 1000.0 * *seconds / static_cast<double>(*frames);
+      if (!row.count) row.count = *frames;
+    }
+    rows.push_back(row);
+  }
+
+  page.Open("time-analysis", "Time analysis (the paper's Table I, measured on this run)");
+  page.body +=
+      "<p>Median, 95th percentile and mean of each module's time per call on this machine; the rate is "
+      "1000&nbsp;/&nbsp;median, the calls per second the module sustains on its own thread (for the whole "
+      "system, 1000&nbsp;/&nbsp;mean: the frames per second of the run, start to end). Segmentation, "
+      "label fusion, local mapping and loop closing run beside tracking, on keyframes or segmented frames, "
+      "so "
+      "tracking never waits for them. The paper measured its system on an Intel Core i7 with an NVIDIA GTX "
+      "1080Ti.</p>\n"
+      "<table class=\"data\" id=\"table-i\">\n<thead><tr><th>module</th><th class=\"num\">median ms</th>"
+      "<th class=\"num\">p95 ms</th><th class=\"num\">mean ms</th><th class=\"num\">rate Hz</th>"
+      "<th class=\"num\">calls</th>"
+      "<th>paper (Table I)</th></tr></thead>\n<tbody>\n";
+  for (const Row& row : rows) {
+    // The rate of a module on its own thread is 1000 / median; the whole system's, its frames per second.
+    const bool whole = row.what == "Whole system";
+    const std::optional<double> rate_ms = whole && row.mean_ms ? row.mean_ms : row.median_ms;
+    page.body += fmt::format(
+        "<tr><td>{}<div class=\"detail\">{}</div></td>{}{}{}{}{}<td>{}</td></tr>\n", HtmlEscape(row.what),
+        HtmlEscape(row.detail), row.median_ms ? Cell(FormatMs(*row.median_ms), *row.median_ms) : Cell(Dash()),
+        row.p95_ms ? Cell(FormatMs(*row.p95_ms), *row.p95_ms) : Cell(Dash()),
+        row.mean_ms ? Cell(FormatMs(*row.mean_ms), *row.mean_ms) : Cell(Dash()),
+        rate_ms ? Cell(FormatHz(*rate_ms), 1000.0 / *rate_ms) : Cell(Dash()),
+        row.count ? Cell(GroupThousands(*row.count), static_cast<double>(*row.count)) : Cell(Dash()),
+        row.paper.empty() ? Dash() : row.paper);
+  }
+  page.body += "</tbody>\n</table>\n";
+  page.Close();
+
+  if (!in.timing || in.timing->empty()) return;
+  std::vector<ModuleTiming> sorted = *in.timing;
+  std::stable_sort(sorted.begin(), sorted.end(), [](const ModuleTiming& a, const ModuleTiming& b) {
+    return a.total_ms.value_or(0.0) > b.total_ms.value_or(0.0);
+  });
+  double max_total = 0.0;
+  for (const ModuleTiming& m : sorted) max_total = std::max(max_total, m.total_ms.value_or(0.0));
+  page.Open("modules", "Every module");
+  page.body +=
+      "<p>From <code>timing.json</code>, by total time. Modules nest (tracking includes ORB extraction and "
+      "pose optimization; local mapping includes local BA), so totals do not add up. Click a column to "
+      "sort.</p>\n"
+      "<table class=\"data sortable\" id=\"module-table\">\n<thead><tr><th>module</th><th "
+      "class=\"num\">calls</th>"
+      "<th class=\"num\">median ms</th><th class=\"num\">mean ms</th><th class=\"num\">p95 ms</th>"
+      "<th class=\"num\">max ms</th><th class=\"num\">total ms</th><th class=\"num\">rate Hz</th>"
+      "<th>share of the largest total</th></tr></thead>\n<tbody>\n";
+  auto optional_ms = [](const std::optional<double>& v) { return v ? Cell(FormatMs(*v), *v) : Cell(Dash()); };
+  for (const ModuleTiming& m : sorted) {
+    const double share = max_total > 0 ? m.total_ms.value_or(0.0) / max_total : 0.0;
+    page.body += fmt::format(
+        "<tr><td><code>{}</code></td>{}{}{}{}{}{}{}<td><span class=\"bar\" "
+        "style=\"width:{:.1f}%\"></span></td>"
+        "</tr>\n",
+        HtmlEscape(m.name), Cell(GroupThousands(m.count), static_cast<double>(m.count)),
+        Cell(FormatMs(m.median_ms), m.median_ms), optional_ms(m.mean_ms), optional_ms(m.p95_ms),
+        optional_ms(m.max_ms), optional_ms(m.total_ms),
+        m.median_ms > 0 ? Cell(FormatHz(m.median_ms), 1000.0 / m.median_ms) : Cell(Dash()), 100.0 * share);
+  }
+  page.body += "</tbody>\n</table>\n";
+  page.Close();
+}
+
+}  // namespace semslam::html_report
