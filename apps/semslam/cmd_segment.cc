@@ -224,7 +224,8 @@ void AddSegmentCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("segment", "Run a segmenter on images (and score it against ground truth)");
   cmd->add_option(
          "--segmenter", args->segmenter,
-         "enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with optional ,key=value settings")
+         "espnetv2:FILE.pth | sinet:FILE.pth | enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with "
+         "optional ,key=value settings (espnetv2/sinet: width=N, threads=N)")
       ->required();
   cmd->add_option("--images", args->images,
                   "Image files or folders (sorted); frame numbers come from the names")

@@ -246,5 +246,19 @@ TEST(TorchNetworks, SegmentersTakeGreyBgrAndBgraImages) {
   }
 }
 
+// auto: SINet for a colour camera, ESPNetv2 for a grey one (SINet reads grey trees as persons), settings kept.
+TEST(TorchNetworks, AutoPicksTheNetworkForTheCamera) {
+  SEMSLAM_REQUIRE_SHARED_DATA(dir, "segmentation_weights");
+  SegmenterContext colour;
+  colour.colour_images = true;
+  const std::string on_colour = MakeSegmenter("auto:" + dir.string(), colour)->Describe();
+  const std::string on_grey = MakeSegmenter("auto:" + dir.string() + ",width=512")->Describe();
+  EXPECT_NE(on_colour.find("sinet"), std::string::npos) << on_colour;
+  EXPECT_NE(on_grey.find("espnetv2"), std::string::npos) << on_grey;
+  EXPECT_NE(on_grey.find("512"), std::string::npos) << on_grey;
+  EXPECT_THROW(MakeSegmenter("auto:" + (dir / "missing").string()), InputError);
+  EXPECT_THROW(MakeSegmenter("auto,alpha=0.5"), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace semslam

@@ -59,6 +59,13 @@ double ParseNumber(const std::string& text, const std::string& what) {
 
 }  // namespace
 
+std::filesystem::path DefaultSegmentationWeightsDir() {
+  const char* shared = std::getenv("SEMSLAM_SHARED_DATA");
+  const std::filesystem::path data = shared != nullptr && *shared != '\0' ? std::filesystem::path(shared)
+                                                                          : std::filesystem::path("../shared/data");
+  return data / "segmentation_weights";
+}
+
 std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterContext& context) {
   const ParsedSpec p = ParseSpec(spec);
   const auto setting = [&](const std::string& key) -> const std::string* {
@@ -113,6 +120,16 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
                                        : EspNetV2CityscapesCard(p.argument, width);
     return std::make_unique<DnnSegmenter>(std::move(card), options);
   }
+  if (p.kind == "auto") {
+    allow({"threads", "width"});
+    const std::filesystem::path dir =
+        p.argument.empty() ? DefaultSegmentationWeightsDir() : std::filesystem::path(p.argument);
+    std::string resolved = context.colour_images
+                               ? "sinet:" + (dir / "sinet_cityscapes.pth").string()
+                               : "espnetv2:" + (dir / "espnetv2_s_2.0_city_1024x512.pth").string();
+    for (const auto& [key, value] : p.settings) resolved += "," + key + "=" + value;
+    return MakeSegmenter(resolved, context);
+  }
   if (p.kind == "labels") {
     allow({"alpha", "ids"});
     need_argument("a folder (labels:DIR)");
@@ -140,8 +157,8 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
   }
   throw InvalidArgument(
       "unknown segmenter '" + std::string(spec) +
-      "'; expected none, enet:FILE, espnetv2:FILE.pth, sinet:FILE.pth, onnx:CARD.yaml, labels:DIR "
-      "or truth-noisy:RATE");
+      "'; expected none, auto[:DIR], enet:FILE, espnetv2:FILE.pth, sinet:FILE.pth, onnx:CARD.yaml, "
+      "labels:DIR or truth-noisy:RATE");
 }
 
 }  // namespace semslam

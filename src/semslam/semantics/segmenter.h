@@ -42,7 +42,13 @@ struct SegmenterContext {
   std::optional<std::filesystem::path> truth_label_dir;
   // Seed for noisy segmenters (mixed with the frame index, so every frame is deterministic).
   std::uint64_t seed = 0;
+  // Whether the segmenter will see colour images (a colour camera); `auto` picks its network by this.
+  bool colour_images = false;
 };
+
+// The folder `auto` reads the weights from when its spec names none: $SEMSLAM_SHARED_DATA/segmentation_weights,
+// else ../shared/data/segmentation_weights (the checkout's sibling, from the repository root).
+std::filesystem::path DefaultSegmentationWeightsDir();
 
 // Builds a segmenter from a spec:
 //   none                     -> nullptr (no segmentation)
@@ -52,6 +58,10 @@ struct SegmenterContext {
 //   onnx:CARD.yaml           -> any OpenCV dnn model described by a model card (also: card:CARD.yaml)
 //   labels:DIR               -> per-frame label images DIR/%06d.png (trainIds) or probabilities DIR/%06d.npy
 //   truth-noisy:RATE         -> context.truth_label_dir through the noise model (RATE in [0, 0.9])
+//   auto[:DIR]               -> the Cityscapes network for the camera: SINet for colour images (fast enough
+//                               for every keyframe, good on colour), ESPNetv2 for grey ones (SINet reads
+//                               grey trees as persons); their state dicts in DIR (default
+//                               DefaultSegmentationWeightsDir())
 // followed by optional ",key=value" settings: alpha=A (confusion model, labels and truth-noisy; default 0.8
 // for labels, 1 - RATE for truth-noisy), ids=train|label (labels: trainIds or Cityscapes labelIds), seed=N,
 // blobs=F (truth-noisy: share of the errors in blobs, default 0.5), blob_size=PX, threads=N (dnn: OpenCV
