@@ -255,7 +255,9 @@ TEST(TorchNetworks, AutoPicksTheNetworkForTheCamera) {
   const std::string on_grey = MakeSegmenter("auto:" + dir.string() + ",width=512")->Describe();
   EXPECT_NE(on_colour.find("sinet"), std::string::npos) << on_colour;
   EXPECT_NE(on_grey.find("espnetv2"), std::string::npos) << on_grey;
-  EXPECT_NE(on_grey.find("512"), std::string::npos) << on_grey;
+  EXPECT_NE(on_grey.find("width 512"), std::string::npos) << on_grey;
+  const std::string default_grey = MakeSegmenter("auto:" + dir.string())->Describe();
+  EXPECT_NE(default_grey.find("width 768"), std::string::npos) << default_grey;
   EXPECT_THROW(MakeSegmenter("auto:" + (dir / "missing").string()), InputError);
   EXPECT_THROW(MakeSegmenter("auto,alpha=0.5"), InvalidArgument);
 }

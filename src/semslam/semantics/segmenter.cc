@@ -127,6 +127,10 @@ std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterC
     std::string resolved = context.colour_images
                                ? "sinet:" + (dir / "sinet_cityscapes.pth").string()
                                : "espnetv2:" + (dir / "espnetv2_s_2.0_city_1024x512.pth").string();
+    // ESPNetv2 at 768 wide rather than its training width 1024: at KITTI size 88 instead of 151 ms a frame, so
+    // a run segments 95 % of the keyframes instead of 60 %, for the same labels (KITTI 07: 2.4 % person, 92 %
+    // street classes; the grey Cityscapes image 0.928 right, 0.911 at 1024).
+    if (!context.colour_images && setting("width") == nullptr) resolved += ",width=768";
     for (const auto& [key, value] : p.settings) resolved += "," + key + "=" + value;
     return MakeSegmenter(resolved, context);
   }

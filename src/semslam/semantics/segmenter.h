@@ -59,9 +59,9 @@ std::filesystem::path DefaultSegmentationWeightsDir();
 //   labels:DIR               -> per-frame label images DIR/%06d.png (trainIds) or probabilities DIR/%06d.npy
 //   truth-noisy:RATE         -> context.truth_label_dir through the noise model (RATE in [0, 0.9])
 //   auto[:DIR]               -> the Cityscapes network for the camera: SINet for colour images (fast enough
-//                               for every keyframe, good on colour), ESPNetv2 for grey ones (SINet reads
-//                               grey trees as persons); their state dicts in DIR (default
-//                               DefaultSegmentationWeightsDir())
+//                               for every keyframe, good on colour), ESPNetv2 768 wide (unless width= says
+//                               otherwise) for grey ones (SINet reads grey trees as persons); their state
+//                               dicts in DIR (default DefaultSegmentationWeightsDir())
 // followed by optional ",key=value" settings: alpha=A (confusion model, labels and truth-noisy; default 0.8
 // for labels, 1 - RATE for truth-noisy), ids=train|label (labels: trainIds or Cityscapes labelIds), seed=N,
 // blobs=F (truth-noisy: share of the errors in blobs, default 0.5), blob_size=PX, threads=N (dnn: OpenCV
