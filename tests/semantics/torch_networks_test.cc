@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -193,13 +194,31 @@ TEST(TorchNetworks, CustomLayersFollowPyTorchConventions) {
 
 // Pixel accuracy and mean IoU (classes present in the truth) of a segmenter on the full-size val image,
 // its output shrunk to the 256x128 truth.
-SegmentationScore ScoreOnCityscapes(Segmenter& segmenter) {
+// Also checks the class mix: every class's share of the labelled truth pixels is matched by its share of the
+// output within `mix_tolerance` (the sample: road 0.34, building 0.44, sidewalk 0.09, car 0.06, ...).
+SegmentationScore ScoreOnCityscapes(Segmenter& segmenter, double mix_tolerance) {
   const cv::Mat image = cv::imread((testing::SharedDataDir() / kImage).string(), cv::IMREAD_COLOR);
   const cv::Mat truth = ReadLabelImage(testing::SharedDataDir() / kTruth);
   cv::Mat predicted;
   cv::resize(segmenter.Segment(image).LabelsAtInputSize(), predicted, truth.size(), 0, 0, cv::INTER_NEAREST);
   SegmentationScore score;
   score.Add(predicted, truth);
+  std::array<double, kNumClasses> truth_share{}, predicted_share{};
+  double labelled = 0.0;
+  for (int y = 0; y < truth.rows; ++y) {
+    for (int x = 0; x < truth.cols; ++x) {
+      const int t = truth.at<std::uint8_t>(y, x), p = predicted.at<std::uint8_t>(y, x);
+      if (!IsValidTrainId(t)) continue;
+      labelled += 1.0;
+      truth_share[static_cast<size_t>(t)] += 1.0;
+      if (IsValidTrainId(p)) predicted_share[static_cast<size_t>(p)] += 1.0;
+    }
+  }
+  for (int c = 0; c < kNumClasses; ++c) {
+    EXPECT_NEAR(predicted_share[static_cast<size_t>(c)] / labelled, truth_share[static_cast<size_t>(c)] / labelled,
+                mix_tolerance)
+        << ClassName(c);
+  }
   return score;
 }
 
@@ -207,7 +226,8 @@ TEST(TorchNetworks, EspNetV2LabelsTheCityscapesImage) {
   SEMSLAM_REQUIRE_SHARED_DATA(dir, "segmentation_weights");
   SEMSLAM_REQUIRE_SHARED_DATA(samples, "cityscapes_samples");
   const auto segmenter = MakeSegmenter("espnetv2:" + (dir / "espnetv2_s_2.0_city_1024x512.pth").string());
-  const SegmentationScore score = ScoreOnCityscapes(*segmenter);
+  // Class shares within 0.025 (measured: building 0.423 against 0.441, road 0.328 against 0.337).
+  const SegmentationScore score = ScoreOnCityscapes(*segmenter, 0.025);
   // The specification's bar; the NumPy reference at 1024x512 scores 0.947.
   EXPECT_GE(score.PixelAccuracy(), 0.93);
   EXPECT_GE(score.MeanIouOverTruthClasses(), 0.6);
@@ -219,7 +239,8 @@ TEST(TorchNetworks, SiNetLabelsTheCityscapesImage) {
   SEMSLAM_REQUIRE_SHARED_DATA(samples, "cityscapes_samples");
   // SINet was trained on full-size Cityscapes images (2048x1024; the NumPy reference scores 0.914 there).
   const auto segmenter = MakeSegmenter("sinet:" + (dir / "sinet_cityscapes.pth").string() + ",width=2048");
-  const SegmentationScore score = ScoreOnCityscapes(*segmenter);
+  // Class shares within 0.035 (measured: building 0.410 against 0.441, car 0.040 against 0.062, bus 0.021).
+  const SegmentationScore score = ScoreOnCityscapes(*segmenter, 0.035);
   EXPECT_GE(score.PixelAccuracy(), 0.9);
   RecordProperty("pixel_accuracy", std::to_string(score.PixelAccuracy()));
 }
