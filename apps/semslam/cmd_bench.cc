@@ -16,6 +16,7 @@ namespace {
 
 struct BenchArgs {
   std::string sequence;
+  std::string camera;
   std::string out;
   int repeat = 5;
   std::vector<std::string> run_args;
@@ -28,6 +29,7 @@ void Run(const BenchArgs& args) {
   options.output = args.out;
   options.repeat = args.repeat;
   options.run_args = args.run_args;
+  if (!args.camera.empty()) options.run_args.insert(options.run_args.begin(), {"--camera", args.camera});
   const BenchResult result = RunBenchmark(options);
   std::printf("%-4s %8s %8s %10s %9s %9s %9s %9s %9s\n", "run", "tracked", "ATE[m]", "track_med", "track_p95",
               "orb_med", "lba_med", "RSS[MiB]", "time[s]");
@@ -53,6 +55,8 @@ void AddBenchCommand(CLI::App& app) {
       "bench",
       "Measure speed and memory end to end: semslam run repeated (arguments after -- go to every run)");
   cmd->add_option("--sequence", args->sequence, "Sequence folder")->required();
+  cmd->add_option("--camera", args->camera,
+                  "Camera of a KITTI folder, passed to every run (see semslam run)");
   cmd->add_option("--out", args->out, "Output folder (run_1/ ... and bench.json)")->required();
   cmd->add_option("--repeat", args->repeat, "Runs")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("run_args", args->run_args, "Arguments for semslam run, after --");

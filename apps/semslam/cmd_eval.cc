@@ -1,5 +1,5 @@
-// semslam eval --estimate F --truth F [--align sim3|se3|none] [--times FILE] [--frames A:B] [--max-dt S]: one JSON object on
-// stdout.
+// semslam eval --estimate F --truth F|DIR [--camera NAME] [--align sim3|se3|none] [--times FILE]
+// [--frames A:B] [--max-dt S]: one JSON object on stdout.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -18,6 +18,7 @@ namespace {
 struct EvalArgs {
   std::string estimate;
   std::string truth;
+  std::string camera;
   std::string align = "sim3";
   std::string times;
   std::string frames;
@@ -72,7 +73,14 @@ void AddEvalCommand(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("eval", "Compare an estimated trajectory with the ground truth (JSON on stdout)");
   cmd->add_option("--estimate", args->estimate, "Estimated trajectory (TUM or KITTI poses)")->required();
-  cmd->add_option("--truth", args->truth, "Ground-truth trajectory (TUM or KITTI poses)")->required();
+  cmd->add_option(
+         "--truth", args->truth,
+         "Ground-truth trajectory (TUM or KITTI poses), or a sequence folder with a ground truth: a "
+         "KITTI odometry sequence with poses/, a KITTI raw drive (its OXTS poses), the synthetic city")
+      ->required();
+  cmd->add_option("--camera", args->camera,
+                  "With a sequence folder as --truth: the camera whose poses are the truth (as semslam run "
+                  "--camera; default image_00 / image_0)");
   cmd->add_option("--align", args->align, "Alignment before ATE: sim3 (monocular), se3 (stereo) or none")
       ->check(CLI::IsMember({"sim3", "se3", "none"}))
       ->capture_default_str();
@@ -97,7 +105,7 @@ void AddEvalCommand(CLI::App& app) {
       if (end != std::numeric_limits<size_t>::max()) frames.end = end;
     }
     const TrajectoryEvaluation result =
-        EvaluateTrajectoryFiles(args->estimate, args->truth, times, options, frames);
+        EvaluateTrajectoryFiles(args->estimate, args->truth, times, options, frames, args->camera);
     const std::string text = ToJson(result, options).dump(2);
     std::fprintf(stdout, "%s\n", text.c_str());
   });

@@ -18,6 +18,7 @@ namespace {
 struct LocalizeArgs {
   std::string map;
   std::string sequence;
+  std::string camera;
   std::string out;
   std::string mode = "mono";
   std::string frames;
@@ -33,6 +34,7 @@ void Run(const LocalizeArgs& args) {
   LocalizeOptions options;
   options.map = args.map;
   options.sequence = args.sequence;
+  options.camera = args.camera;
   options.output = args.out;
   options.slam.mode = ParseSensorMode(args.mode).value();  // CLI11 checked the name
   options.slam.pacing = Pacing::kFast;
@@ -62,6 +64,10 @@ void AddLocalizeCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--sequence", args->sequence, "Sequence to localize (any folder semslam run reads)")
       ->required();
+  cmd->add_option(
+      "--camera", args->camera,
+      "Camera of a KITTI folder: image_00..image_03 of a raw drive, image_0..image_3 of an odometry sequence "
+      "(default image_00 / image_0); stereo uses the pair 00/01 or 02/03 (0/1 or 2/3)");
   cmd->add_option("--out", args->out,
                   "Output folder (created if missing). A folder holding an earlier run is refused unless "
                   "--overwrite is given; two commands never write into one folder at once")

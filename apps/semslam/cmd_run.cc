@@ -19,6 +19,7 @@ namespace {
 
 struct RunArgs {
   std::string sequence;
+  std::string camera;
   std::string out;
   std::string mode = "mono";
   std::string frames;
@@ -43,6 +44,7 @@ struct RunArgs {
 void Run(const RunArgs& args) {
   RunOptions options;
   options.sequence = args.sequence;
+  options.camera = args.camera;
   options.output = args.out;
   options.slam.mode = ParseSensorMode(args.mode).value();  // CLI11 checked the name
   if (!args.config.empty()) ApplySlamConfig(args.config, &options.slam);
@@ -76,6 +78,10 @@ void AddRunCommand(CLI::App& app) {
          "KITTI odometry sequence folder, KITTI raw drive, synthetic city output, or image folder with "
          "camera.yaml")
       ->required();
+  cmd->add_option(
+      "--camera", args->camera,
+      "Camera of a KITTI folder: image_00..image_03 of a raw drive, image_0..image_3 of an odometry sequence "
+      "(default image_00 / image_0); stereo uses the pair 00/01 or 02/03 (0/1 or 2/3)");
   cmd->add_option("--out", args->out,
                   "Output folder (created if missing). A folder holding an earlier run is refused unless "
                   "--overwrite is given; two commands never write into one folder at once")

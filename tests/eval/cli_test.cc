@@ -2,9 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "semslam/eval/trajectory_metrics.h"
 #include "semslam/io/trajectory_io.h"
 #include "support/test_support.h"
 
@@ -112,6 +115,52 @@ TEST_F(EvalCli, ErrorsExitNonZeroWithOneLine) {
 
   r = RunSemslam({"eval", "--estimate", (dir_ / "late.tum").string(), "--truth", truth, "--align", "affine"});
   EXPECT_NE(r.exit_code, 0);
+}
+
+// A KITTI raw drive as the truth: its OXTS poses for the chosen camera (io/kitti_raw.h).
+TEST_F(EvalCli, RawDriveFolderAsTheTruth) {
+  SEMSLAM_REQUIRE_SHARED_DATA(drive, "kitti_raw_2011_09_26_drive_0005/2011_09_26/2011_09_26_drive_0005_sync");
+  const Trajectory truth = ReadSequenceGroundTruth(drive, "image_02");
+  ASSERT_EQ(truth.size(), 154u);
+  Trajectory scaled = truth;
+  for (auto& p : scaled) p.world_from_camera.translation *= 2.0;
+  WriteTumTrajectory(dir_ / "scaled.tum", scaled);
+  CommandResult r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth",
+                                drive.string(), "--camera", "image_02"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("matched"), 154);
+  EXPECT_NEAR(j.at("ate_rmse").get<double>(), 0.0, 1e-6);
+  EXPECT_NEAR(j.at("scale").get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(j.at("path_length_m").get<double>(), 69.4, 0.1);
+
+  // Against camera 0's truth (frames 0-79, 6 ms later, 6 cm to the right): 80 matches, centimetres apart.
+  r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth", drive.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("matched"), 80);
+  EXPECT_LT(j.at("ate_rmse").get<double>(), 0.05);
+
+  // A camera that is not there, a camera with a file as the truth, a folder without a truth: one line each.
+  r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth", drive.string(), "--camera",
+                  "image_03"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("image_03/data"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth",
+                  (dir_ / "scaled.tum").string(), "--camera", "image_02"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("sequence folder"), std::string::npos) << r.err;
+  testing::TempDir no_truth;
+  std::filesystem::copy(drive.parent_path() / "calib_cam_to_cam.txt", no_truth / "calib_cam_to_cam.txt");
+  std::filesystem::create_directories(no_truth / "drive/image_02");
+  std::filesystem::copy(drive / "image_02/timestamps.txt", no_truth / "drive/image_02/timestamps.txt");
+  std::filesystem::create_directories(no_truth / "drive/image_02/data");
+  std::filesystem::copy(drive / "image_02/data/0000000000.png", no_truth / "drive/image_02/data");
+  r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth",
+                  (no_truth / "drive").string(), "--camera", "image_02"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no ground truth"), std::string::npos) << r.err;
 }
 
 }  // namespace

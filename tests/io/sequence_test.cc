@@ -165,6 +165,85 @@ TEST(KittiOdometrySequence, BrokenSequencesAreReportedWithTheFile) {
   EXPECT_INPUT_ERROR(OpenSequence(seq), "calib.txt", "not found");
 }
 
+// A KITTI odometry folder with all four cameras: the colour pair 2/3 sits 6 cm left of the grey pair and
+// 1 cm ahead of it (P2/P3 carry the offset as KITTI's do), with a baseline of 0.48 m.
+fs::path WriteFourCameraLayout(const fs::path& root, int frames) {
+  WriteSyntheticLayout(root, frames);
+  const fs::path seq = root / "sequences" / "00";
+  for (int i = 0; i < frames; ++i) {
+    cv::Mat color(48, 64, CV_8UC3, cv::Scalar(200, 90, 20));
+    color.setTo(cv::Scalar(10, 60, 250), Pattern(64, 48, i) > 128);
+    WritePng(seq / "image_2" / fmt::format("{:06d}.png", i), color);
+    WritePng(seq / "image_3" / fmt::format("{:06d}.png", i), Pattern(64, 48, 200 + i));
+  }
+  KittiCalibration calibration = MakeKittiCalibration(SmallRig());
+  const Eigen::Vector3d t2(0.06, 0.0, 0.01), t3(0.06 - 0.48, 0.0, 0.01);  // camera_k from camera 0
+  calibration.projection[2].col(3) = SmallRig().left.K() * t2;
+  calibration.projection[3].col(3) = SmallRig().left.K() * t3;
+  WriteKittiCalibration(seq / "calib.txt", calibration);
+  return seq;
+}
+
+TEST(KittiOdometrySequence, CameraChoice) {
+  testing::TempDir dir;
+  const fs::path seq = WriteFourCameraLayout(dir.path(), 3);
+  const auto grey = OpenSequence(seq);
+  EXPECT_EQ(grey->camera_name(), "image_0");
+  EXPECT_FALSE(grey->IsColor());
+  EXPECT_DOUBLE_EQ(grey->stereo()->baseline, 0.5);
+
+  const auto color = OpenSequence(dir.path(), {"image_2", true});
+  EXPECT_EQ(color->camera_name(), "image_2");
+  EXPECT_TRUE(color->IsColor());
+  ASSERT_TRUE(color->stereo().has_value());
+  EXPECT_NEAR(color->stereo()->baseline, 0.48, 1e-12);
+  EXPECT_EQ(color->LoadColorImage(1).type(), CV_8UC3);
+  EXPECT_EQ(cv::norm(color->LoadImage(1, 0), GreyFromColor(color->LoadColorImage(1)), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(color->LoadImage(2, 1), Pattern(64, 48, 202), cv::NORM_INF), 0.0);
+  EXPECT_FALSE(color->LabelDirectory().has_value());  // the labels are camera 0's
+  // The poses are camera 0's (straight ahead, 1 m a frame): camera 2's in its own first frame are the same
+  // here, the offset cancelling on a straight drive without rotation.
+  ASSERT_TRUE(color->GroundTruth().has_value());
+  EXPECT_LT((color->GroundTruth()->at(2).world_from_camera.translation - Eigen::Vector3d(0, 0, 2)).norm(),
+            1e-12);
+
+  const auto right = OpenSequence(seq, {"image_3", false});
+  EXPECT_FALSE(right->stereo().has_value());
+  EXPECT_FALSE(right->IsColor());
+  EXPECT_INPUT_ERROR(OpenSequence(seq, {"image_3", true}), "image_3", "right camera", "image_2");
+  EXPECT_INPUT_ERROR(OpenSequence(seq, {"image_02", false}), "no camera 'image_02'", "image_0..image_3");
+  fs::remove_all(seq / "image_3");
+  EXPECT_FALSE(OpenSequence(seq, {"image_2", false})->stereo().has_value());
+  EXPECT_INPUT_ERROR(OpenSequence(seq, {"image_2", true}), "image_3", "folder not found", "stereo");
+  fs::remove_all(seq / "image_2");
+  EXPECT_INPUT_ERROR(OpenSequence(seq, {"image_2", false}), "image_2", "folder not found");
+}
+
+TEST(KittiOdometrySequence, CameraOffsetMovesTheGroundTruth) {
+  testing::TempDir dir;
+  const fs::path seq = WriteFourCameraLayout(dir.path(), 2);
+  // Camera 0 turns 90 deg left (about -y) while it moves 1 m ahead.
+  Trajectory turn = StraightDrive({0.0, 0.1});
+  turn[1].world_from_camera.rotation = Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY());
+  WriteKittiPoses(dir / "poses/00.txt", turn);
+  const Trajectory truth = *OpenSequence(seq, {"image_2", false})->GroundTruth();
+  // Camera 2 is at (-0.06, 0, -0.01) in camera 0's frame; after the turn at (0.01, 0, 1 - 0.06) in the first
+  // camera 0's frame, that is (0.07, 0, 0.95) from where it started.
+  const Eigen::Vector3d camera2_in_camera0(-0.06, 0.0, -0.01);
+  const Eigen::Vector3d after = turn[1].world_from_camera * camera2_in_camera0 - camera2_in_camera0;
+  EXPECT_LT((truth[1].world_from_camera.translation - after).norm(), 1e-9);
+  EXPECT_NEAR(after.x(), 0.07, 1e-9);
+  EXPECT_NEAR(after.z(), 0.95, 1e-9);
+}
+
+TEST(OpenSequence, ImageFoldersHaveNoCameraChoice) {
+  testing::TempDir dir;
+  WritePng(dir / "0.png", Pattern(40, 20, 0));
+  WriteText(dir / "camera.yaml", "fx: 30\nfy: 30\ncx: 19.5\ncy: 9.5\n");
+  EXPECT_EQ(OpenSequence(dir.path())->camera_name(), "");
+  EXPECT_INPUT_ERROR(OpenSequence(dir.path(), {"image_02", false}), "camera.yaml", "one camera", "image_02");
+}
+
 TEST(OpenSequence, ExplainsWhatWasExpected) {
   testing::TempDir dir;
   EXPECT_INPUT_ERROR(OpenSequence(dir / "nowhere"), "nowhere", "not found", "KITTI odometry", "camera.yaml");

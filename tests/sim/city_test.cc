@@ -154,9 +154,16 @@ TEST(Route, SpeedHeightAndLane) {
   const Route& route = sim.route();
   ASSERT_EQ(sim.num_frames(), 1200u);
   const double dt = 1.0 / sim.options().route.rate_hz;
+  int cruising = 0;
   for (size_t f = 0; f < sim.num_frames(); ++f) {
-    EXPECT_GE(route.speed[f], 8.0 - 1e-9);
+    // Streets at a cruise speed of 10-12 m/s; turns as slow as the yaw-rate and lateral-acceleration limits
+    // ask: 5.2 m/s on the tightest arc (7.5 m; route_dynamics_test.cc checks the limits themselves).
+    EXPECT_GE(route.speed[f], 5.0) << f;
     EXPECT_LE(route.speed[f], 12.0 + 1e-9);
+    if (std::abs(route.yaw_rate[f]) < 1e-6 && std::abs(route.acceleration[f]) < 1e-6) {
+      EXPECT_GE(route.speed[f], 10.0 - 1e-9) << f;
+      ++cruising;
+    }
     EXPECT_NEAR(route.town_from_camera[f].translation.z(), 1.65, 1e-9);
     if (f > 0) {
       // Distance between frames = speed * dt (chords in turns are a little shorter).
@@ -170,6 +177,7 @@ TEST(Route, SpeedHeightAndLane) {
     const Eigen::Vector3d down = route.town_from_camera[f].rotation * Eigen::Vector3d::UnitY();
     EXPECT_NEAR(down.z(), -1.0, 1e-9);
   }
+  EXPECT_GT(cruising, 300);  // of 1200 frames (measured 428; the rest turn, brake or speed up)
   // On straight stretches the camera is in the right lane: lane_offset to the right of a street centre line.
   const StreetGrid& g = sim.city().grid;
   int checked = 0;

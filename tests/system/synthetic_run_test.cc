@@ -1,4 +1,4 @@
-// `semslam synth` then `semslam run` on the synthetic city (200 frames, ~202 m, one left turn, eight
+// `semslam synth` then `semslam run` on the synthetic city (200 frames, ~195 m, one left turn, eight
 // landmarks), judged against the city's ground truth: poses, label images, the scene's surfaces, GPS truth
 // and landmark positions.
 //
@@ -36,9 +36,10 @@ using ::testing::StartsWith;
 
 // Bounds, measured on the development machine (seed 1; seeds 2 and 3 for the spread) with a margin of 3-5x.
 // Monocular ATE after Sim(3) alignment, as a fraction of the path length: measured 0.05 % (0.106 m over 202
-// m; seeds 2 and 3: 0.128 m and 0.033 m).
+// m; seeds 2 and 3: 0.128 m and 0.033 m); on the route with a car's yaw rate (issue 9) 0.103 m over 195 m.
 constexpr double kMonoAteFractionOfPath = 0.0025;
-// Stereo ATE after SE(3) alignment: measured 0.065 m (seeds 2, 3: 0.057 m, 0.033 m); Sim(3) scale 1.0012.
+// Stereo ATE after SE(3) alignment: measured 0.065 m (seeds 2, 3: 0.057 m, 0.033 m; 0.066 m on the new route);
+// Sim(3) scale 1.0012.
 constexpr double kStereoAteM = 0.25;
 constexpr double kStereoScaleTolerance = 0.01;
 
@@ -139,7 +140,7 @@ TEST_F(SyntheticRun, MonoInitializesEarlyTracksEveryFrameAndIsAccurate) {
 
   // ATE (Sim(3)), against a bound measured with margin.
   const double path = j.value("path_length_m", 0.0);
-  EXPECT_NEAR(path, 202.2, 1.0);
+  EXPECT_NEAR(path, 195.1, 1.0);  // 202.2 m before the route took its turns at a car's yaw rate (issue 9)
   const double ate = j["ate_rmse"].get<double>();
   EXPECT_EQ(j.value("ate_alignment", ""), "sim3");
   EXPECT_LE(ate, kMonoAteFractionOfPath * path) << "ATE " << ate << " m over " << path << " m";

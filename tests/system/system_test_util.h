@@ -46,7 +46,7 @@ struct Artifact {
 Artifact SharedArtifact(const std::string& name, const std::vector<std::string>& recipe,
                         const std::function<std::string(const fs::path& dir)>& make);
 
-// `semslam synth --out DIR --frames 200 --seed 1`: the synthetic city, 200 frames (~200 m, one left turn,
+// `semslam synth --out DIR --frames 200 --seed 1`: the synthetic city, 200 frames (~195 m, one left turn,
 // eight landmarks, GPS every frame with 1 m noise).
 constexpr int kSyntheticFrames = 200;
 Artifact SyntheticDataset();

@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numeric>
+#include <system_error>
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/alignment.h"
+#include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
 
 namespace semslam {
@@ -317,6 +320,17 @@ AteResult ComputeAte(const Trajectory& estimate, const Trajectory& truth, Alignm
   return AteOfMatched(m, alignment);
 }
 
+Trajectory ReadSequenceGroundTruth(const fs::path& sequence, const std::string& camera) {
+  const std::unique_ptr<ImageSequence> opened = OpenSequence(sequence, {camera, false});
+  std::optional<Trajectory> truth = opened->GroundTruth();
+  if (!truth) {
+    throw InputError(sequence,
+                     "the sequence has no ground truth (a KITTI odometry sequence needs "
+                     "poses/<name>.txt two folders up, a KITTI raw drive its oxts/ folder)");
+  }
+  return std::move(*truth);
+}
+
 ErrorSeries ComputeErrorSeries(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
                                double max_dt) {
   Require(std::isfinite(max_dt) && max_dt >= 0, "ComputeErrorSeries: max_dt must be >= 0");
@@ -353,19 +367,26 @@ Trajectory StampKittiPoses(const std::vector<Rigid3d>& poses, size_t first,
 
 TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs::path& truth,
                                              const std::optional<fs::path>& times, const EvalOptions& options,
-                                             const FrameRange& frames) {
+                                             const FrameRange& frames, const std::string& truth_camera) {
   options.Check();
   Require(!frames.end || frames.first < *frames.end,
           fmt::format("frames {}:{}: the range is empty", frames.first, frames.end.value_or(0)));
+  std::error_code ec;
+  const bool truth_is_sequence = fs::is_directory(truth, ec);
+  if (!truth_is_sequence && !truth_camera.empty()) {
+    throw InputError(
+        truth, fmt::format("a camera ('{}') applies only when the truth is a sequence folder", truth_camera));
+  }
   const TrajectoryFormat estimate_format = DetectTrajectoryFormat(estimate);
-  const TrajectoryFormat truth_format = DetectTrajectoryFormat(truth);
+  const TrajectoryFormat truth_format =
+      truth_is_sequence ? TrajectoryFormat::kTum : DetectTrajectoryFormat(truth);
   if (estimate_format != truth_format && !times) {
     const fs::path& kitti = estimate_format == TrajectoryFormat::kKitti ? estimate : truth;
     const fs::path& tum = estimate_format == TrajectoryFormat::kTum ? estimate : truth;
     throw InputError(
         kitti, fmt::format("KITTI poses carry no timestamps: give the sequence's times.txt (--times) to "
-                           "match them against the TUM file {}",
-                           tum.string()));
+                           "match them against the {} {}",
+                           truth_is_sequence ? "sequence's ground truth of" : "TUM file", tum.string()));
   }
   std::optional<std::vector<double>> stamps;
   if (times) stamps = ReadTimes(*times);
@@ -394,7 +415,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
                                  poses.begin() + static_cast<std::ptrdiff_t>(end));
     truth_trajectory = StampKittiPoses(poses, first, stamps);
   } else {
-    truth_trajectory = ReadTumTrajectory(truth);
+    truth_trajectory = truth_is_sequence ? ReadSequenceGroundTruth(truth, truth_camera) : ReadTumTrajectory(truth);
   }
 
   Trajectory estimate_trajectory;

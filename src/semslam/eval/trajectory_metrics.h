@@ -146,11 +146,17 @@ struct FrameRange {
 // TUM file cannot be matched against a KITTI file without `times`. A KITTI ground truth is used over
 // `frames`. A KITTI estimate must hold exactly one pose per frame it is compared with (the ground truth's
 // frames in the range when that is a KITTI file, else the stamps of `times` in the range): a missing line
-// would pair every later pose with the wrong frame, so the files are refused with the reason. Throws
-// InputError naming the files.
+// would pair every later pose with the wrong frame, so the files are refused with the reason. The truth may
+// also be a sequence folder whose reader has a ground truth (io/sequence.h: a KITTI odometry sequence with
+// poses/, a KITTI raw drive with oxts/, the synthetic city), for its camera `truth_camera` (empty: the default
+// one), stamped with the sequence's timestamps. Throws InputError naming the files.
 TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estimate,
                                              const std::filesystem::path& truth,
                                              const std::optional<std::filesystem::path>& times,
-                                             const EvalOptions& options = {}, const FrameRange& frames = {});
+                                             const EvalOptions& options = {}, const FrameRange& frames = {},
+                                             const std::string& truth_camera = {});
+// The ground truth of a sequence folder (see EvaluateTrajectoryFiles). Throws InputError naming the folder
+// when its reader has none.
+Trajectory ReadSequenceGroundTruth(const std::filesystem::path& sequence, const std::string& camera = {});
 
 }  // namespace semslam

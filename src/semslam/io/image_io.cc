@@ -1,4 +1,4 @@
-// ReadGreyImage and WritePng (declared in sequence.h).
+// ReadImage, ReadGreyImage, GreyFromColor and WritePng (declared in sequence.h).
 
 #include <fmt/format.h>
 
@@ -63,7 +63,7 @@ std::string CheckPngStructure(const std::vector<unsigned char>& bytes) {
 
 }  // namespace
 
-cv::Mat ReadGreyImage(const fs::path& path) {
+cv::Mat ReadImage(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "image file not found");
   std::ifstream in(path, std::ios::binary);
@@ -89,15 +89,24 @@ cv::Mat ReadGreyImage(const fs::path& path) {
     throw InputError(
         path, fmt::format("unsupported pixel depth (OpenCV depth {}); expected 8 or 16 bit", image.depth()));
   }
-  if (image.channels() == 3) {
-    cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
-  } else if (image.channels() == 4) {
-    cv::cvtColor(image, image, cv::COLOR_BGRA2GRAY);
-  } else if (image.channels() != 1) {
+  if (image.channels() == 4) {
+    cv::cvtColor(image, image, cv::COLOR_BGRA2BGR);
+  } else if (image.channels() != 1 && image.channels() != 3) {
     throw InputError(path, fmt::format("unsupported number of channels ({})", image.channels()));
   }
   return image;
 }
+
+cv::Mat GreyFromColor(const cv::Mat& image) {
+  Require(image.type() == CV_8UC1 || image.type() == CV_8UC3,
+          "GreyFromColor: expected an 8-bit grey or BGR image");
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+cv::Mat ReadGreyImage(const fs::path& path) { return GreyFromColor(ReadImage(path)); }
 
 void WritePng(const fs::path& path, const cv::Mat& image, int compression) {
   Require(!image.empty(), "WritePng: empty image");

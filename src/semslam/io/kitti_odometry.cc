@@ -48,24 +48,41 @@ std::string FormatRow(const std::string& key, const Eigen::Matrix3x4d& m) {
 
 }  // namespace
 
-PinholeCamera KittiCalibration::Camera0(int width, int height) const {
-  Require(num_projections >= 1, "KittiCalibration::Camera0: no P0");
+PinholeCamera KittiCalibration::Camera(int index, int width, int height) const {
+  Require(index >= 0 && index < num_projections,
+          fmt::format("KittiCalibration::Camera: no P{} (the calibration has {})", index, num_projections));
+  const Eigen::Matrix3x4d& p = projection[static_cast<size_t>(index)];
   PinholeCamera camera;
   camera.width = width;
   camera.height = height;
-  camera.fx = projection[0](0, 0);
-  camera.fy = projection[0](1, 1);
-  camera.cx = projection[0](0, 2);
-  camera.cy = projection[0](1, 2);
+  camera.fx = p(0, 0);
+  camera.fy = p(1, 1);
+  camera.cx = p(0, 2);
+  camera.cy = p(1, 2);
   camera.Check();
   return camera;
 }
 
-std::optional<StereoRig> KittiCalibration::Stereo01(int width, int height) const {
-  if (num_projections < 2) return std::nullopt;
+Eigen::Vector3d KittiCalibration::Offset(int index) const {
+  Require(index >= 0 && index < num_projections,
+          fmt::format("KittiCalibration::Offset: no P{} (the calibration has {})", index, num_projections));
+  return ProjectionOffset(projection[static_cast<size_t>(index)]);
+}
+
+Eigen::Vector3d ProjectionOffset(const Eigen::Matrix3x4d& p) {
+  // P(:,3) = K t with K upper triangular: back-substitute.
+  const double tz = p(2, 3);
+  const double ty = (p(1, 3) - p(1, 2) * tz) / p(1, 1);
+  const double tx = (p(0, 3) - p(0, 1) * ty - p(0, 2) * tz) / p(0, 0);
+  return {tx, ty, tz};
+}
+
+std::optional<StereoRig> KittiCalibration::Stereo(int left, int width, int height) const {
+  Require(left == 0 || left == 2, "KittiCalibration::Stereo: the left camera of a pair is 0 or 2");
+  if (num_projections < left + 2) return std::nullopt;
   StereoRig rig;
-  rig.left = Camera0(width, height);
-  rig.baseline = -projection[1](0, 3) / projection[1](0, 0);
+  rig.left = Camera(left, width, height);
+  rig.baseline = Offset(left).x() - Offset(left + 1).x();
   rig.Check();
   return rig;
 }
@@ -109,18 +126,23 @@ KittiCalibration ReadKittiCalibration(const fs::path& path) {
           fmt::format("given without P{} (rows must be P0, P1, ... in order)", calibration.num_projections));
     }
   }
-  if (calibration.num_projections >= 2) {
-    const Eigen::Matrix3x4d& p0 = calibration.projection[0];
-    const Eigen::Matrix3x4d& p1 = calibration.projection[1];
-    if ((p1.leftCols<3>() - p0.leftCols<3>()).cwiseAbs().maxCoeff() > 1e-6 * p0(0, 0)) {
-      throw InputError(seen_at[1], "P1", "intrinsics differ from P0's: not a rectified stereo pair");
+  // The pairs 0/1 and 2/3 are rectified stereo rigs: shared intrinsics, the right camera on the left one's
+  // +x.
+  for (const int left : {0, 2}) {
+    if (calibration.num_projections < left + 2) continue;
+    const Eigen::Matrix3x4d& pl = calibration.projection[static_cast<size_t>(left)];
+    const Eigen::Matrix3x4d& pr = calibration.projection[static_cast<size_t>(left + 1)];
+    const SourceLocation& where = seen_at[static_cast<size_t>(left + 1)];
+    if ((pr.leftCols<3>() - pl.leftCols<3>()).cwiseAbs().maxCoeff() > 1e-6 * pl(0, 0)) {
+      throw InputError(where, fmt::format("P{}", left + 1),
+                       fmt::format("intrinsics differ from P{}'s: not a rectified stereo pair", left));
     }
-    if (!(-p1(0, 3) / p1(0, 0) > 0)) {
-      throw InputError(
-          seen_at[1], "P1[3]",
-          fmt::format("gives baseline {} m; the right camera must lie on the left camera's +x axis "
-                      "(P1[3] = -fx * baseline < 0)",
-                      -p1(0, 3) / p1(0, 0)));
+    const double baseline = calibration.Offset(left).x() - calibration.Offset(left + 1).x();
+    if (!(baseline > 0)) {
+      throw InputError(where, fmt::format("P{}[3]", left + 1),
+                       fmt::format("gives baseline {} m; the right camera must lie on the left camera's +x "
+                                   "axis (P{}[3] < P{}[3])",
+                                   baseline, left + 1, left));
     }
   }
   return calibration;
@@ -149,57 +171,88 @@ KittiCalibration MakeKittiCalibration(const StereoRig& rig) {
   return calibration;
 }
 
-std::unique_ptr<ImageSequence> OpenKittiOdometry(const fs::path& sequence_dir) {
+std::unique_ptr<ImageSequence> OpenKittiOdometry(const fs::path& sequence_dir,
+                                                 const SequenceOptions& options) {
   io_internal::SequenceFiles files;
   files.directory = io_internal::NormalizeDirectory(sequence_dir);
   const fs::path& dir = files.directory;
   files.name = dir.filename().string();
+  const io_internal::KittiCamera chosen = io_internal::ChooseKittiCamera(dir, options, /*raw=*/false);
+  files.camera_name = chosen.name;
   std::error_code ec;
-  if (!fs::is_directory(dir / "image_0", ec)) {
-    throw InputError(dir / "image_0", "folder not found (a KITTI odometry sequence has image_0/%06d.png)");
+  if (!fs::is_directory(dir / chosen.name, ec)) {
+    throw InputError(dir / chosen.name, fmt::format("folder not found (a KITTI odometry sequence has "
+                                                    "{}/%06d.png for camera {})",
+                                                    chosen.name, chosen.name));
   }
-  files.left = io_internal::NumberedFiles(dir / "image_0", 6, ".png");
+  files.left = io_internal::NumberedFiles(dir / chosen.name, 6, ".png");
   const size_t n = files.left.size();
 
   const KittiCalibration calibration = ReadKittiCalibration(dir / "calib.txt");
-  files.camera = calibration.Camera0(1, 1);
+  if (chosen.index >= calibration.num_projections) {
+    throw InputError(SourceLocation{dir / "calib.txt", 0}, fmt::format("P{}", chosen.index),
+                     fmt::format("missing: camera {} needs it", chosen.name));
+  }
+  files.camera = calibration.Camera(chosen.index, 1, 1);
   files.camera.width = files.camera.height = 0;  // set from the first image
   files.calibration = dir / "calib.txt";
 
   const fs::path times_file = dir / "times.txt";
   const std::vector<double> times = ReadTimes(times_file);
   if (times.size() < n) {
-    throw InputError(times_file, fmt::format("lists {} timestamps, fewer than the {} images in image_0/",
-                                             times.size(), n));
+    throw InputError(times_file, fmt::format("lists {} timestamps, fewer than the {} images in {}/",
+                                             times.size(), n, chosen.name));
   }
   files.timestamps.assign(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(n));
 
-  if (fs::is_directory(dir / "image_1", ec) && calibration.num_projections >= 2) {
-    const std::vector<fs::path> right = io_internal::ListFiles(dir / "image_1", {".png"});
-    if (right.size() < n) {
-      throw InputError(dir / "image_1",
-                       fmt::format("holds {} images, fewer than the {} in image_0/ (stereo pairs "
-                                   "need both)",
-                                   right.size(), n));
+  if (chosen.right_name) {
+    const std::string& right_name = *chosen.right_name;
+    const bool has_folder = fs::is_directory(dir / right_name, ec);
+    const bool has_row = calibration.num_projections >= chosen.index + 2;
+    if (options.stereo && !has_folder) {
+      throw InputError(dir / right_name, fmt::format("folder not found: stereo with camera {} needs {}",
+                                                     chosen.name, right_name));
     }
-    for (size_t i = 0; i < n; ++i) files.right.push_back(dir / "image_1" / files.left[i].filename());
-    files.baseline = -calibration.projection[1](0, 3) / calibration.projection[1](0, 0);
+    if (options.stereo && !has_row) {
+      throw InputError(
+          SourceLocation{dir / "calib.txt", 0}, fmt::format("P{}", chosen.index + 1),
+          fmt::format("missing: stereo with camera {} needs the row of {}", chosen.name, right_name));
+    }
+    if (has_folder && has_row) {
+      const std::vector<fs::path> right = io_internal::ListFiles(dir / right_name, {".png"});
+      if (right.size() < n) {
+        throw InputError(dir / right_name,
+                         fmt::format("holds {} images, fewer than the {} in {}/ (stereo pairs need both)",
+                                     right.size(), n, chosen.name));
+      }
+      for (size_t i = 0; i < n; ++i) files.right.push_back(dir / right_name / files.left[i].filename());
+      files.baseline = calibration.Offset(chosen.index).x() - calibration.Offset(chosen.index + 1).x();
+    }
   }
 
   const fs::path poses = dir.parent_path().parent_path() / "poses" / (files.name + ".txt");
   if (fs::is_regular_file(poses, ec)) {
-    const std::vector<Rigid3d> world_from_camera = ReadKittiPoses(poses);
-    if (world_from_camera.size() < n) {
+    const std::vector<Rigid3d> world_from_camera0 = ReadKittiPoses(poses);
+    if (world_from_camera0.size() < n) {
       throw InputError(poses, fmt::format("holds {} poses, fewer than the {} images of the sequence",
-                                          world_from_camera.size(), n));
+                                          world_from_camera0.size(), n));
     }
+    // The poses are camera 0's in the first camera 0's frame; the chosen camera's, in its own first frame,
+    // are camera_from_camera0 * pose * camera0_from_camera (a translation: the rectified cameras are
+    // parallel).
+    const Rigid3d camera_from_camera0(Eigen::Quaterniond::Identity(), calibration.Offset(chosen.index));
+    const Rigid3d camera0_from_camera = camera_from_camera0.Inverse();
     Trajectory truth;
     truth.reserve(n);
-    for (size_t i = 0; i < n; ++i) truth.push_back({files.timestamps[i], world_from_camera[i]});
+    for (size_t i = 0; i < n; ++i) {
+      truth.push_back(
+          {files.timestamps[i], camera_from_camera0 * world_from_camera0[i] * camera0_from_camera});
+    }
     files.ground_truth = std::move(truth);
   }
-  if (fs::is_directory(dir / "label_0", ec)) files.labels = dir / "label_0";
-  if (fs::is_directory(dir / "depth_0", ec)) files.depth = dir / "depth_0";
+  // The synthetic city's labels and depth are camera 0's.
+  if (chosen.index == 0 && fs::is_directory(dir / "label_0", ec)) files.labels = dir / "label_0";
+  if (chosen.index == 0 && fs::is_directory(dir / "depth_0", ec)) files.depth = dir / "depth_0";
   return io_internal::MakeFileSequence(std::move(files));
 }
 

@@ -4,6 +4,9 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
 #include <regex>
 #include <system_error>
 
@@ -247,6 +250,34 @@ Rigid3d ReadKittiRawRigid(const fs::path& path) {
                      fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})", deviation));
   }
   return Rigid3d::FromMatrix(m);
+}
+
+std::vector<VelodynePoint> ReadVelodyneScan(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, "Velodyne scan not found");
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.eof() && in.fail()) throw InputError(path, "cannot read the Velodyne scan");
+  constexpr size_t kPointBytes = 4 * sizeof(float);
+  if (bytes.empty() || bytes.size() % kPointBytes != 0) {
+    throw InputError(path, fmt::format("{} bytes: not a whole number of points (x y z reflectance, 16 bytes "
+                                       "each)",
+                                       bytes.size()));
+  }
+  std::vector<VelodynePoint> points(bytes.size() / kPointBytes);
+  for (size_t i = 0; i < points.size(); ++i) {
+    float v[4];
+    std::memcpy(v, bytes.data() + i * kPointBytes, kPointBytes);
+    for (const float x : v) {
+      if (!std::isfinite(x)) {
+        throw InputError(path,
+                         fmt::format("point {} (byte {}) holds a non-finite value", i, i * kPointBytes));
+      }
+    }
+    points[i].position = Eigen::Vector3d(v[0], v[1], v[2]);
+    points[i].reflectance = v[3];
+  }
+  return points;
 }
 
 }  // namespace semslam

@@ -63,13 +63,46 @@ Rigid3d ReadKittiRawRigid(const std::filesystem::path& path);  // velo_from_imu 
 // parent (KITTI's date folder). Throws InputError naming both places when it is in neither.
 std::filesystem::path FindKittiRawCalibFile(const std::filesystem::path& drive_dir,
                                             const std::string& file_name);
-// The rectified grey camera 0 from the OXTS (IMU) frame: R_rect_00 * cam0_from_velo * velo_from_imu.
-Rigid3d ReadKittiRawRectifiedCam0FromImu(const std::filesystem::path& drive_dir);
+// The rectified camera `camera_index` (0..3) from the OXTS (IMU) frame:
+// [I | t] * R_rect_00 * cam0_from_velo * velo_from_imu, where t is the camera's offset in P_rect_0<index>
+// = K [I | t] (the rectified cameras share R_rect_00's orientation).
+Rigid3d ReadKittiRawRectifiedCameraFromImu(const std::filesystem::path& drive_dir, int camera_index);
+inline Rigid3d ReadKittiRawRectifiedCam0FromImu(const std::filesystem::path& drive_dir) {
+  return ReadKittiRawRectifiedCameraFromImu(drive_dir, 0);
+}
 
-// Opens a KITTI raw drive folder (<date>_drive_XXXX_sync/): image_00/data/%010d.png with
-// image_00/timestamps.txt (Unix seconds), stereo when image_01/data/ is there too; camera from P_rect_00 and
-// S_rect_00 (baseline from P_rect_01) of calib_cam_to_cam.txt. No ground truth (the OXTS poses are the geo
-// module's business).
-std::unique_ptr<ImageSequence> OpenKittiRaw(const std::filesystem::path& drive_dir);
+// The rectified camera `camera_index` (0..3) from the Velodyne frame: [I | t] * R_rect_00 * cam0_from_velo
+// (project with the camera's intrinsics from P_rect_0<index>).
+Rigid3d ReadKittiRawRectifiedCameraFromVelo(const std::filesystem::path& drive_dir, int camera_index);
+
+// A Velodyne scan (velodyne_points/data/%010d.bin): float32 x y z reflectance per point, x forward, y left,
+// z up, metres. Throws InputError naming the file when it is missing, empty of points, not a whole number of
+// points, or holds a non-finite value.
+struct VelodynePoint {
+  Eigen::Vector3d position;
+  float reflectance = 0.0f;
+};
+std::vector<VelodynePoint> ReadVelodyneScan(const std::filesystem::path& path);
+
+// The pose of an OXTS reading as KITTI's raw devkit computes it (convertOxtsToPose): position from a
+// Mercator projection scaled by cos(latitude of the first reading) (x east, y north, metres on a sphere of
+// radius 6378137 m) and the altitude as z; attitude R = Rz(yaw) Ry(pitch) Rx(roll). The pose maps the IMU
+// frame (x forward, y left, z up) into that world.
+double OxtsMercatorScale(double first_latitude_deg);
+Rigid3d OxtsWorldFromImu(const OxtsRecord& record, double mercator_scale);
+// Camera poses from OXTS readings: world_from_camera per reading, for the camera rigidly mounted as
+// `camera_from_imu`, expressed in the first reading's camera frame (the first pose is the identity), as
+// KITTI odometry poses are. Empty for no readings.
+std::vector<Rigid3d> OxtsCameraPoses(const std::vector<OxtsRecord>& records, const Rigid3d& camera_from_imu);
+
+// Opens a KITTI raw drive folder (<date>_drive_XXXX_sync/) with the camera `options` chooses (image_00 by
+// default): image_0X/data/%010d.png with image_0X/timestamps.txt (Unix seconds), stereo with the pair's right
+// camera (image_01 for image_00, image_03 for image_02) when its data/ folder is there; camera from P_rect_0X
+// and S_rect_0X of calib_cam_to_cam.txt, baseline from the pair's P_rect offsets. A colour camera
+// (image_02/03) reads as grey with LoadImage and as BGR with LoadColorImage. Ground truth, when oxts/ is
+// there: OxtsCameraPoses of the chosen camera, frame i from oxts record i (the synced drives record them in
+// step), timestamps from the camera.
+std::unique_ptr<ImageSequence> OpenKittiRaw(const std::filesystem::path& drive_dir,
+                                            const SequenceOptions& options = {});
 
 }  // namespace semslam

@@ -1,11 +1,14 @@
 // The KITTI raw drive as an ImageSequence, and the drive's calibration chain.
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <system_error>
 
 #include "semslam/core/error.h"
+#include "semslam/io/kitti_odometry.h"
 #include "semslam/io/kitti_raw.h"
 #include "semslam/io/sequence_internal.h"
 
@@ -23,37 +26,85 @@ fs::path FindKittiRawCalibFile(const fs::path& drive_dir, const std::string& fil
                                                 dir.parent_path().string()));
 }
 
-Rigid3d ReadKittiRawRectifiedCam0FromImu(const fs::path& drive_dir) {
-  const Rigid3d velo_from_imu = ReadKittiRawRigid(FindKittiRawCalibFile(drive_dir, "calib_imu_to_velo.txt"));
+namespace {
+
+Eigen::Matrix3x4d Matrix3x4(const std::vector<double>& values) {
+  Eigen::Matrix3x4d m;
+  for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = values[static_cast<size_t>(i)];
+  return m;
+}
+
+SourceLocation LineOf(const KittiRawCalibFile& calib, const std::string& key) {
+  const auto line = calib.lines.find(key);
+  return SourceLocation{calib.file, line == calib.lines.end() ? 0 : line->second};
+}
+
+// P_rect_0X of calib_cam_to_cam.txt, checked to be a rectified projection K [I | t].
+Eigen::Matrix3x4d RectifiedProjection(const KittiRawCalibFile& calib, int camera_index) {
+  const std::string key = fmt::format("P_rect_0{}", camera_index);
+  const Eigen::Matrix3x4d p = Matrix3x4(calib.Get(key, 12));
+  if (!(p(0, 0) > 0) || !(p(1, 1) > 0))
+    throw InputError(LineOf(calib, key), key, "focal lengths must be positive");
+  if (p(2, 0) != 0 || p(2, 1) != 0 || std::abs(p(2, 2) - 1.0) > 1e-9) {
+    throw InputError(LineOf(calib, key), key, "the third row must start with 0 0 1 (a rectified projection)");
+  }
+  return p;
+}
+
+std::string CamerasPresent(const fs::path& dir) {
+  std::string list;
+  std::error_code ec;
+  for (int i = 0; i < 4; ++i) {
+    const std::string name = fmt::format("image_0{}", i);
+    if (fs::is_directory(dir / name / "data", ec)) list += (list.empty() ? "" : ", ") + name;
+  }
+  return list.empty() ? "none" : list;
+}
+
+}  // namespace
+
+Rigid3d ReadKittiRawRectifiedCameraFromVelo(const fs::path& drive_dir, int camera_index) {
+  Require(camera_index >= 0 && camera_index <= 3, "ReadKittiRawRectifiedCameraFromVelo: cameras are 0..3");
   const Rigid3d cam0_from_velo = ReadKittiRawRigid(FindKittiRawCalibFile(drive_dir, "calib_velo_to_cam.txt"));
   const KittiRawCalibFile cam =
       ReadKittiRawCalibFile(FindKittiRawCalibFile(drive_dir, "calib_cam_to_cam.txt"));
   const std::vector<double> r = cam.Get("R_rect_00", 9);
   Eigen::Matrix3x4d m = Eigen::Matrix3x4d::Zero();
-  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = r[i];
+  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = r[static_cast<size_t>(i)];
   const Rigid3d rect_from_cam0 = Rigid3d::FromMatrix(m);
-  return rect_from_cam0 * cam0_from_velo * velo_from_imu;
+  const Rigid3d camera_from_rect(Eigen::Quaterniond::Identity(),
+                                 ProjectionOffset(RectifiedProjection(cam, camera_index)));
+  return camera_from_rect * rect_from_cam0 * cam0_from_velo;
 }
 
-std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir) {
+Rigid3d ReadKittiRawRectifiedCameraFromImu(const fs::path& drive_dir, int camera_index) {
+  const Rigid3d velo_from_imu = ReadKittiRawRigid(FindKittiRawCalibFile(drive_dir, "calib_imu_to_velo.txt"));
+  return ReadKittiRawRectifiedCameraFromVelo(drive_dir, camera_index) * velo_from_imu;
+}
+
+std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir, const SequenceOptions& options) {
   io_internal::SequenceFiles files;
   files.directory = io_internal::NormalizeDirectory(drive_dir);
   const fs::path& dir = files.directory;
   files.name = dir.filename().string();
+  const io_internal::KittiCamera chosen = io_internal::ChooseKittiCamera(dir, options, /*raw=*/true);
+  files.camera_name = chosen.name;
   std::error_code ec;
-  if (!fs::is_directory(dir / "image_00" / "data", ec)) {
-    throw InputError(dir / "image_00" / "data",
-                     "folder not found (a KITTI raw drive has image_00/data/%010d.png)");
+  const fs::path images = dir / chosen.name / "data";
+  if (!fs::is_directory(images, ec)) {
+    throw InputError(images,
+                     fmt::format("folder not found (a KITTI raw drive has {}/data/%010d.png for camera "
+                                 "{}; cameras with images here: {})",
+                                 chosen.name, chosen.name, CamerasPresent(dir)));
   }
-  files.left = io_internal::NumberedFiles(dir / "image_00" / "data", 10, ".png");
+  files.left = io_internal::NumberedFiles(images, 10, ".png");
   const size_t n = files.left.size();
 
-  const fs::path stamps_file = dir / "image_00" / "timestamps.txt";
+  const fs::path stamps_file = dir / chosen.name / "timestamps.txt";
   const std::vector<double> stamps = ReadKittiRawTimestamps(stamps_file);
   if (stamps.size() < n) {
-    throw InputError(
-        stamps_file,
-        fmt::format("lists {} timestamps, fewer than the {} images in image_00/data/", stamps.size(), n));
+    throw InputError(stamps_file, fmt::format("lists {} timestamps, fewer than the {} images in {}/data/",
+                                              stamps.size(), n, chosen.name));
   }
   for (size_t i = 1; i < n; ++i) {
     if (!(stamps[i] > stamps[i - 1])) {
@@ -64,42 +115,64 @@ std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir) {
   files.timestamps.assign(stamps.begin(), stamps.begin() + static_cast<std::ptrdiff_t>(n));
 
   const KittiRawCalibFile calib = ReadKittiRawCalibFile(FindKittiRawCalibFile(dir, "calib_cam_to_cam.txt"));
-  const std::vector<double> p0 = calib.Get("P_rect_00", 12);
-  const std::vector<double> size = calib.Get("S_rect_00", 2);
-  files.camera.fx = p0[0];
-  files.camera.fy = p0[5];
-  files.camera.cx = p0[2];
-  files.camera.cy = p0[6];
+  const std::string p_key = fmt::format("P_rect_0{}", chosen.index);
+  const std::string s_key = fmt::format("S_rect_0{}", chosen.index);
+  const Eigen::Matrix3x4d p = RectifiedProjection(calib, chosen.index);
+  const std::vector<double> size = calib.Get(s_key, 2);
+  files.camera.fx = p(0, 0);
+  files.camera.fy = p(1, 1);
+  files.camera.cx = p(0, 2);
+  files.camera.cy = p(1, 2);
   files.calibration = calib.file;
   files.camera.width = static_cast<int>(std::lround(size[0]));
   files.camera.height = static_cast<int>(std::lround(size[1]));
-  const SourceLocation p0_at{calib.file, calib.lines.at("P_rect_00")};
-  if (!(p0[0] > 0) || !(p0[5] > 0)) throw InputError(p0_at, "P_rect_00", "focal lengths must be positive");
   if (!(files.camera.width > 0) || !(files.camera.height > 0)) {
-    throw InputError(SourceLocation{calib.file, calib.lines.at("S_rect_00")}, "S_rect_00",
-                     "image size must be positive");
+    throw InputError(LineOf(calib, s_key), s_key, "image size must be positive");
   }
 
-  if (fs::is_directory(dir / "image_01" / "data", ec)) {
-    const std::vector<double> p1 = calib.Get("P_rect_01", 12);
-    const SourceLocation p1_at{calib.file, calib.lines.at("P_rect_01")};
-    const double baseline = -p1[3] / p1[0];
-    if (std::abs(p1[0] - p0[0]) > 1e-6 * p0[0] || std::abs(p1[5] - p0[5]) > 1e-6 * p0[5] ||
-        std::abs(p1[2] - p0[2]) > 1e-6 * p0[0] || std::abs(p1[6] - p0[6]) > 1e-6 * p0[0]) {
-      throw InputError(p1_at, "P_rect_01", "intrinsics differ from P_rect_00's: not a rectified stereo pair");
+  if (chosen.right_name) {
+    const fs::path right_images = dir / *chosen.right_name / "data";
+    if (fs::is_directory(right_images, ec)) {
+      const int right_index = chosen.index + 1;
+      const std::string right_key = fmt::format("P_rect_0{}", right_index);
+      const Eigen::Matrix3x4d p_right = RectifiedProjection(calib, right_index);
+      if ((p_right.leftCols<3>() - p.leftCols<3>()).cwiseAbs().maxCoeff() > 1e-6 * p(0, 0)) {
+        throw InputError(LineOf(calib, right_key), right_key,
+                         fmt::format("intrinsics differ from {}'s: not a rectified stereo pair", p_key));
+      }
+      const double baseline = ProjectionOffset(p).x() - ProjectionOffset(p_right).x();
+      if (!(baseline > 0)) {
+        throw InputError(LineOf(calib, right_key), right_key,
+                         fmt::format("gives baseline {} m; expected a positive one", baseline));
+      }
+      const size_t right_count = io_internal::ListFiles(right_images, {".png"}).size();
+      if (right_count < n) {
+        throw InputError(right_images, fmt::format("holds {} images, fewer than the {} in {}/data/",
+                                                   right_count, n, chosen.name));
+      }
+      for (size_t i = 0; i < n; ++i) files.right.push_back(right_images / files.left[i].filename());
+      files.baseline = baseline;
+    } else if (options.stereo) {
+      throw InputError(right_images, fmt::format("folder not found: stereo with camera {} needs its right "
+                                                 "camera {}",
+                                                 chosen.name, *chosen.right_name));
     }
-    if (!(baseline > 0)) {
-      throw InputError(p1_at, "P_rect_01",
-                       fmt::format("gives baseline {} m; expected a positive one", baseline));
+  }
+
+  if (fs::is_directory(dir / "oxts", ec)) {
+    const std::vector<StampedOxts> readings = ReadOxtsFolder(dir / "oxts");
+    std::vector<OxtsRecord> records;
+    for (size_t i = 0; i < std::min(n, readings.size()); ++i) records.push_back(readings[i].record);
+    if (records.size() < n) {
+      spdlog::warn("{}: {} readings for {} frames: ground truth for the first {} frames only",
+                   (dir / "oxts").string(), records.size(), n, records.size());
     }
-    const size_t right_count = io_internal::ListFiles(dir / "image_01" / "data", {".png"}).size();
-    if (right_count < n) {
-      throw InputError(dir / "image_01" / "data",
-                       fmt::format("holds {} images, fewer than the {} in image_00/data/", right_count, n));
-    }
-    for (size_t i = 0; i < n; ++i)
-      files.right.push_back(dir / "image_01" / "data" / files.left[i].filename());
-    files.baseline = baseline;
+    const std::vector<Rigid3d> poses =
+        OxtsCameraPoses(records, ReadKittiRawRectifiedCameraFromImu(dir, chosen.index));
+    Trajectory truth;
+    truth.reserve(poses.size());
+    for (size_t i = 0; i < poses.size(); ++i) truth.push_back({files.timestamps[i], poses[i]});
+    if (!truth.empty()) files.ground_truth = std::move(truth);
   }
   return io_internal::MakeFileSequence(std::move(files));
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <system_error>
 
@@ -22,7 +23,7 @@ namespace {
 
 class FileSequence final : public ImageSequence {
  public:
-  explicit FileSequence(SequenceFiles files) : files_(std::move(files)) {
+  FileSequence(SequenceFiles files, bool color) : files_(std::move(files)), color_(color) {
     if (files_.baseline) {
       stereo_ = StereoRig{files_.camera, *files_.baseline};
       stereo_->Check();
@@ -44,12 +45,18 @@ class FileSequence final : public ImageSequence {
     Require(camera_index == 0 || (camera_index == 1 && stereo_),
             fmt::format("LoadImage: no camera {} in sequence {}", camera_index, files_.name));
     const fs::path& file = camera_index == 0 ? files_.left[frame] : files_.right[frame];
-    cv::Mat image = ReadGreyImage(file);
-    if (image.cols != files_.camera.width || image.rows != files_.camera.height) {
-      throw InputError(file,
-                       fmt::format("image is {}x{}, expected {}x{} (the size of the sequence's first image)",
-                                   image.cols, image.rows, files_.camera.width, files_.camera.height));
-    }
+    return CheckSize(file, ReadGreyImage(file));
+  }
+
+  std::string camera_name() const override { return files_.camera_name; }
+  bool IsColor() const override { return color_; }
+  cv::Mat LoadColorImage(size_t frame) const override {
+    Require(frame < size(),
+            fmt::format("LoadColorImage: frame {} out of range (sequence has {})", frame, size()));
+    if (!color_) return {};
+    const fs::path& file = files_.left[frame];
+    cv::Mat image = CheckSize(file, ReadImage(file));
+    if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);  // a grey frame in colour
     return image;
   }
 
@@ -58,7 +65,17 @@ class FileSequence final : public ImageSequence {
   std::optional<fs::path> DepthDirectory() const override { return files_.depth; }
 
  private:
+  cv::Mat CheckSize(const fs::path& file, cv::Mat image) const {
+    if (image.cols != files_.camera.width || image.rows != files_.camera.height) {
+      throw InputError(file,
+                       fmt::format("image is {}x{}, expected {}x{} (the size of the sequence's first image)",
+                                   image.cols, image.rows, files_.camera.width, files_.camera.height));
+    }
+    return image;
+  }
+
   SequenceFiles files_;
+  bool color_ = false;
   std::optional<StereoRig> stereo_;
 };
 
@@ -75,7 +92,7 @@ std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files) {
   Require(files.right.empty() || files.right.size() == files.left.size(),
           "MakeFileSequence: one right image per left image expected");
   Require(!files.baseline || !files.right.empty(), "MakeFileSequence: a stereo sequence needs right images");
-  const cv::Mat first = ReadGreyImage(files.left.front());
+  const cv::Mat first = ReadImage(files.left.front());
   if (files.camera.width > 0 && (files.camera.width != first.cols || files.camera.height != first.rows)) {
     throw InputError(files.left.front(),
                      fmt::format("image is {}x{} but the calibration says {}x{}", first.cols, first.rows,
@@ -84,7 +101,8 @@ std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files) {
   files.camera.width = first.cols;
   files.camera.height = first.rows;
   CheckCameraPlausible(files.camera, files.calibration.empty() ? files.directory : files.calibration);
-  return std::make_unique<FileSequence>(std::move(files));
+  const bool color = first.channels() == 3;
+  return std::make_unique<FileSequence>(std::move(files), color);
 }
 
 void CheckCameraPlausible(const PinholeCamera& camera, const fs::path& calibration) {
@@ -189,6 +207,32 @@ std::vector<fs::path> NumberedFiles(const fs::path& dir, int digits, const std::
   return files;
 }
 
+KittiCamera ChooseKittiCamera(const fs::path& dir, const SequenceOptions& options, bool raw) {
+  const std::string prefix = raw ? "image_0" : "image_";
+  const std::string all = raw ? "image_00..image_03" : "image_0..image_3";
+  const std::string layout = raw ? "KITTI raw drive" : "KITTI odometry folder";
+  KittiCamera camera;
+  if (!options.camera.empty()) {
+    const std::string& name = options.camera;
+    if (name.size() != prefix.size() + 1 || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.back() < '0' || name.back() > '3') {
+      throw InputError(dir, fmt::format("no camera '{}' in a {}: its cameras are {}", name, layout, all));
+    }
+    camera.index = name.back() - '0';
+  }
+  const auto folder = [&](int index) { return prefix + static_cast<char>('0' + index); };
+  camera.name = folder(camera.index);
+  if (camera.index % 2 == 0) camera.right_name = folder(camera.index + 1);
+  if (options.stereo && !camera.right_name) {
+    throw InputError(
+        dir / camera.name,
+        fmt::format("camera {} is the right camera of the stereo pair {}/{}: stereo takes the left "
+                    "one, {}",
+                    camera.name, folder(camera.index - 1), camera.name, folder(camera.index - 1)));
+  }
+  return camera;
+}
+
 }  // namespace io_internal
 
 namespace {
@@ -205,25 +249,38 @@ bool IsFile(const fs::path& p) {
 constexpr char kExpected[] =
     "expected one of: a KITTI odometry sequence folder (image_0/, calib.txt, times.txt), a dataset root "
     "holding "
-    "sequences/XX/ (KITTI odometry or the synthetic city), a KITTI raw drive folder (image_00/data/ with "
-    "calib_cam_to_cam.txt beside it or in its parent), or an image folder with camera.yaml (or the .yaml "
+    "sequences/XX/ (KITTI odometry or the synthetic city), a KITTI raw drive folder (image_00/data/, or "
+    "image_01..03, with calib_cam_to_cam.txt beside it or in its parent), or an image folder with "
+    "camera.yaml (or the .yaml "
     "file "
     "itself)";
 
 }  // namespace
 
-std::unique_ptr<ImageSequence> OpenSequence(const fs::path& path) {
+std::unique_ptr<ImageSequence> OpenSequence(const fs::path& path, const SequenceOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, fmt::format("not found; {}", kExpected));
+  // Image folders have one camera: a camera choice is a mistake there, not something to ignore.
+  const auto single_camera = [&](const fs::path& yaml) {
+    if (!options.camera.empty()) {
+      throw InputError(yaml,
+                       fmt::format("an image folder has one camera; camera '{}' applies to KITTI "
+                                   "odometry folders (image_0..image_3) and raw drives (image_00..image_03)",
+                                   options.camera));
+    }
+    return OpenImageFolder(yaml);
+  };
   if (IsFile(path)) {
     const std::string ext = path.extension().string();
-    if (ext == ".yaml" || ext == ".yml") return OpenImageFolder(path);
+    if (ext == ".yaml" || ext == ".yml") return single_camera(path);
     throw InputError(path, fmt::format("is a file, not a sequence; {}", kExpected));
   }
-  if (IsDir(path / "image_0") || IsFile(path / "calib.txt")) return OpenKittiOdometry(path);
-  if (IsDir(path / "image_00")) return OpenKittiRaw(path);
+  if (IsDir(path / "image_0") || IsFile(path / "calib.txt")) return OpenKittiOdometry(path, options);
+  for (const char* camera : {"image_00", "image_01", "image_02", "image_03"}) {
+    if (IsDir(path / camera)) return OpenKittiRaw(path, options);
+  }
   for (const char* name : {"camera.yaml", "camera.yml"}) {
-    if (IsFile(path / name)) return OpenImageFolder(path / name);
+    if (IsFile(path / name)) return single_camera(path / name);
   }
   if (IsDir(path / "sequences")) {
     std::vector<fs::path> candidates;
@@ -231,7 +288,7 @@ std::unique_ptr<ImageSequence> OpenSequence(const fs::path& path) {
       if (entry.is_directory(ec) && IsDir(entry.path() / "image_0")) candidates.push_back(entry.path());
     }
     std::sort(candidates.begin(), candidates.end());
-    if (candidates.size() == 1) return OpenKittiOdometry(candidates.front());
+    if (candidates.size() == 1) return OpenKittiOdometry(candidates.front(), options);
     if (candidates.empty()) {
       throw InputError(path / "sequences",
                        "holds no sequence folder with image_0/ (expected sequences/XX/image_0/)");

@@ -12,6 +12,18 @@
 
 namespace semslam {
 
+// Which camera of a recording to read.
+struct SequenceOptions {
+  // The camera read as the left one. Empty: the default, image_00 of a KITTI raw drive or image_0 of a KITTI
+  // odometry folder. KITTI raw drives have image_00..image_03, KITTI odometry folders image_0..image_3; the
+  // stereo pairs are 00/01 and 02/03 (0/1 and 2/3), so choosing 00 or 02 gives the pair's right camera as
+  // camera 1, and 01 or 03 is a monocular camera. Other sequences have one camera: a name is an error there.
+  std::string camera;
+  // The chosen camera must be the left one of a stereo pair whose right images are there (an InputError
+  // naming the missing folder otherwise). Without it a sequence is stereo when it can be.
+  bool stereo = false;
+};
+
 class ImageSequence {
  public:
   virtual ~ImageSequence() = default;
@@ -27,6 +39,14 @@ class ImageSequence {
   // 8-bit grey image of camera 0 (left) or 1 (right). Throws InputError naming the file when it is
   // missing, corrupt, or not of the calibrated size.
   virtual cv::Mat LoadImage(size_t frame, int camera_index = 0) const = 0;
+  // The camera read as camera 0 (SequenceOptions::camera; "image_00", "image_2", ...), empty when the
+  // sequence has no choice of camera.
+  virtual std::string camera_name() const { return {}; }
+  // Whether camera 0 records colour (its first image has three or four channels).
+  virtual bool IsColor() const { return false; }
+  // Camera 0's image in colour, 8-bit BGR, for a colour camera; an empty Mat for a grey one. LoadImage(frame,
+  // 0) is GreyFromColor of this image: a caller that needs both converts it rather than reading it twice.
+  virtual cv::Mat LoadColorImage(size_t /*frame*/) const { return {}; }
   // Ground-truth trajectory (camera 0, world = first camera), when the sequence has one.
   virtual std::optional<Trajectory> GroundTruth() const { return std::nullopt; }
   // Folder of per-frame label images (Cityscapes trainIds), when the sequence has one (the synthetic city).
@@ -38,11 +58,18 @@ class ImageSequence {
 // Opens whatever `path` holds: a KITTI odometry sequence (image_0/ + calib.txt), a KITTI raw drive
 // (image_00/data + calibration files), a synthetic city output folder (sequences/00 inside it), or an image
 // folder with camera.yaml. Throws InputError explaining what was expected when none matches.
-std::unique_ptr<ImageSequence> OpenSequence(const std::filesystem::path& path);
+// `options` chooses the camera of a KITTI folder (InputError naming the folder for a camera it does not
+// have).
+std::unique_ptr<ImageSequence> OpenSequence(const std::filesystem::path& path,
+                                            const SequenceOptions& options = {});
 
-// Reads an 8-bit grey image, converting colour to grey. Throws InputError naming the file if it is missing or
-// cannot be decoded.
+// Reads an image as 8 bits (16-bit images are scaled), grey or BGR (an alpha channel is dropped). Throws
+// InputError naming the file if it is missing or cannot be decoded.
+cv::Mat ReadImage(const std::filesystem::path& path);
+// Reads an 8-bit grey image, converting colour to grey.
 cv::Mat ReadGreyImage(const std::filesystem::path& path);
+// An 8-bit BGR image in grey (OpenCV's BGR2GRAY weights); an 8-bit grey image as it is.
+cv::Mat GreyFromColor(const cv::Mat& image);
 // Writes a PNG atomically (PNG compression level 1 unless given).
 void WritePng(const std::filesystem::path& path, const cv::Mat& image, int compression = 1);
 

@@ -15,6 +15,8 @@ namespace semslam::io_internal {
 struct SequenceFiles {
   std::string name;
   std::filesystem::path directory;
+  std::string
+      camera_name;  // the camera read as the left one (ImageSequence::camera_name), empty if no choice
   std::vector<std::filesystem::path> left;
   std::vector<std::filesystem::path> right;  // empty for a monocular sequence, else one per left image
   std::vector<double> timestamps;            // one per left image
@@ -50,5 +52,16 @@ bool NaturalLess(const std::string& a, const std::string& b);
 // `dir` holds none.
 std::vector<std::filesystem::path> NumberedFiles(const std::filesystem::path& dir, int digits,
                                                  const std::string& extension);
+
+// The camera of a KITTI layout that SequenceOptions::camera names (raw: image_00..image_03; odometry:
+// image_0..image_3), and the right camera of its stereo pair when it is the pair's left one (0 or 2). Throws
+// InputError naming `dir` for a name the layout does not have, and naming the camera's folder when stereo is
+// asked of a right camera.
+struct KittiCamera {
+  int index = 0;
+  std::string name;                       // its folder: image_02 / image_2
+  std::optional<std::string> right_name;  // image_03 / image_3 for camera 2
+};
+KittiCamera ChooseKittiCamera(const std::filesystem::path& dir, const SequenceOptions& options, bool raw);
 
 }  // namespace semslam::io_internal

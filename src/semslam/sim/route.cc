@@ -16,7 +16,15 @@ constexpr double kStep = 0.25;  // spacing of the dense path, metres
 constexpr double kLeftRadius = 11.0;
 constexpr double kRightRadius = 7.5;
 constexpr double kSmoothSigma = 2.0;  // metres
-constexpr double kLateralAcceleration = 2.5;
+// What cars do on the KITTI drives, at 10 Hz (heading of the camera's forward axis between frames; lateral
+// acceleration = speed x yaw rate). Ground-truth poses of odometry sequences 00-10: yaw rate at most 47.8 deg/s
+// (4.8 deg per frame, sequence 00; 99.9th percentile 4.2 deg per frame over all sequences), lateral
+// acceleration at most 5.5 m/s^2 (sequence 01, on the highway; 99.9th percentile 4.9). Sequence 07: 34.6 deg/s,
+// 3.3 m/s^2. OXTS of raw drive 0005 (slow urban): 14.4 deg/s, 1.3 m/s^2 (1.6 deg per frame); drive 0001:
+// 2.4 deg/s, 0.5 m/s^2. The limits (kRouteMaxYawRate, kRouteMaxLateralAcceleration in route.h) sit above
+// sequence 07's and drive 0005's maxima, so the route has turns as sharp as theirs, and below the sharpest of
+// all the sequences. Corners are driven as arcs at the speed both limits allow: a right turn (7.5 m) at
+// 5.2 m/s, a left turn (11 m) at 6.6 m/s.
 constexpr double kAcceleration = 1.0;
 constexpr double kDeceleration = 1.5;
 
@@ -35,6 +43,7 @@ class IntersectionPlanner {
     i_ = std::clamp(ni / 2 + rng_.UniformInt(-1, 1), 1, ni - 2);
     j_ = std::clamp(nj / 2 + rng_.UniformInt(-1, 1), 1, nj - 2);
     heading_ = rng_.UniformInt(0, 3);
+    arrival_ = heading_;
     const int pi = i_ - kDi[heading_], pj = j_ - kDj[heading_];
     if (g_.Drivable(pi, pj)) seq_.push_back(g_.IntersectionId(pi, pj));
     seq_.push_back(g_.IntersectionId(i_, j_));
@@ -70,13 +79,14 @@ class IntersectionPlanner {
 
   // Applies the moves if every intersection they reach is drivable.
   bool Apply(const std::vector<Move>& moves) {
-    int i = i_, j = j_, h = heading_;
+    int i = i_, j = j_, h = heading_, last_driven = arrival_;
     std::vector<int> added;
     for (const Move& m : moves) {
       if (m.turn) {
         h = (h + (m.value > 0 ? 1 : 3)) % 4;
         continue;
       }
+      if (m.value > 0) last_driven = h;
       for (int k = 0; k < m.value; ++k) {
         i += kDi[h];
         j += kDj[h];
@@ -90,16 +100,20 @@ class IntersectionPlanner {
     i_ = i;
     j_ = j;
     heading_ = h;
+    arrival_ = last_driven;
     return true;
   }
 
-  // One block towards the middle of the town (never a U-turn).
+  // One block towards the middle of the town, never back the way the car came: heading_ may hold a turn the
+  // car has not driven yet (a module ends with one), so a turn from it could be a U-turn from where the car
+  // arrived (at seeds 3, 77 and 4242 it was: a reversal on a 3.6 m circle, 25 deg per frame).
   void Fallback() {
     const double ci = 0.5 * (g_.ni() - 1), cj = 0.5 * (g_.nj() - 1);
     int best = -1;
     double best_d = 1e18;
     for (int turn : {0, 1, 3}) {
       const int h = (heading_ + turn) % 4;
+      if (h == (arrival_ + 2) % 4) continue;
       const int i = i_ + kDi[h], j = j_ + kDj[h];
       if (!g_.Drivable(i, j)) continue;
       const double d = std::hypot(i - ci, j - cj) + (turn == 0 ? 0.5 : 0.0);
@@ -110,6 +124,7 @@ class IntersectionPlanner {
     }
     Require(best >= 0, "PlanRoute: the town is too small to drive in");
     heading_ = best;
+    arrival_ = best;
     i_ += kDi[best];
     j_ += kDj[best];
     seq_.push_back(g_.IntersectionId(i_, j_));
@@ -119,6 +134,7 @@ class IntersectionPlanner {
   Rng& rng_;
   std::vector<int> seq_;
   int i_ = 0, j_ = 0, heading_ = 0;
+  int arrival_ = 0;  // the heading of the last block driven
 };
 
 Eigen::Vector2d Right(const Eigen::Vector2d& e) { return {e.y(), -e.x()}; }
@@ -269,11 +285,14 @@ Route PlanRoute(const City& city, const RouteOptions& options) {
     Rng street = Rng::Stream(route_seed, Hash3(12, k, options.reverse ? 1 : 0));
     cruise[k] = street.Uniform(cruise_lo, options.max_speed);
   }
+  // In turns the car slows below the cruise speed as far as the yaw-rate and lateral-acceleration limits ask
+  // (min_speed bounds the cruise speeds, not the turns: the old floor of 8 m/s gave 61 deg/s and 8.5 m/s^2).
   std::vector<double> v(count);
   for (size_t i = 0; i < count; ++i) {
     const double k = std::abs(curvature[i]);
-    const double limit = k > 1e-6 ? std::sqrt(kLateralAcceleration / k) : 1e9;
-    v[i] = std::clamp(limit, options.min_speed, cruise[static_cast<size_t>(path.piece[i])]);
+    const double limit =
+        k > 1e-6 ? std::min(std::sqrt(kRouteMaxLateralAcceleration / k), kRouteMaxYawRate / k) : 1e9;
+    v[i] = std::min(limit, cruise[static_cast<size_t>(path.piece[i])]);
   }
   for (size_t i = 1; i < count; ++i)
     v[i] = std::min(v[i], std::sqrt(v[i - 1] * v[i - 1] + 2 * kAcceleration * kStep));

@@ -1,10 +1,13 @@
 #pragma once
 // The drive through the town: a sequence of intersections made of rectangular loops around blocks, turned
 // alternately left and right; after each loop the car drives the loop's first street again in the same
-// direction (a revisit for loop closure) before it leaves for the next one. The path keeps to the right lane,
-// turns on circular arcs smoothed to continuous curvature, and is driven at 8-12 m/s with limited
-// acceleration, slower in the turns. Poses are sampled at the camera rate.
+// direction (a revisit for loop closure) before it leaves for the next one, never turning back on itself. The
+// path keeps to the right lane and turns on circular arcs smoothed to continuous curvature. Each street has a
+// cruise speed; the car accelerates and brakes at limited rates and takes the turns as slowly as a car's
+// yaw rate (40 deg/s) and lateral acceleration (4 m/s^2) limits ask, below the maxima of the KITTI drives
+// (see route.cc). Poses are sampled at the camera rate.
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -13,9 +16,14 @@
 
 namespace semslam::sim {
 
+// The dynamics the route keeps to (route.cc gives the KITTI figures behind them).
+inline constexpr double kRouteMaxYawRate = 40.0 * M_PI / 180.0;  // rad/s
+inline constexpr double kRouteMaxLateralAcceleration = 4.0;      // m/s^2
+
 struct RouteOptions {
   int frames = 1200;
   double rate_hz = 10.0;
+  // Cruise speeds per street are drawn from [max(min_speed, 10), max_speed] m/s; turns are slower.
   double min_speed = 8.0;       // m/s
   double max_speed = 12.0;      // m/s
   double camera_height = 1.65;  // above the road

@@ -15,8 +15,9 @@ namespace semslam {
 class ImageSequence;
 
 struct FrameImages {
-  cv::Mat left;
+  cv::Mat left;   // grey, for tracking
   cv::Mat right;  // empty unless stereo
+  cv::Mat color;  // the left image in colour (8-bit BGR) when asked for and the camera has colour, else empty
 };
 
 struct BadFrame {
@@ -26,8 +27,9 @@ struct BadFrame {
 
 class FrameReader {
  public:
-  // max_bad_in_row: how many bad frames in a row are tolerated (0: none).
-  FrameReader(const ImageSequence& sequence, bool stereo, size_t max_bad_in_row);
+  // max_bad_in_row: how many bad frames in a row are tolerated (0: none). color: keep the left image in colour
+  // too (for the segmenter) when the sequence has colour; it is decoded once and converted to grey.
+  FrameReader(const ImageSequence& sequence, bool stereo, size_t max_bad_in_row, bool color = false);
 
   // The frame's images, or nullopt when one of them cannot be used (warned and counted).
   std::optional<FrameImages> Read(size_t frame);
@@ -39,6 +41,7 @@ class FrameReader {
  private:
   const ImageSequence& sequence_;
   bool stereo_;
+  bool color_;
   size_t max_bad_in_row_;
   size_t bad_in_row_ = 0;
   std::vector<BadFrame> bad_frames_;

@@ -83,10 +83,10 @@ void LocalizeOptions::Check() const {
 LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   options.Check();
   Stopwatch watch;
-  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
   SlamOptions slam_options = options.slam;
   slam_options.localization_only = true;
   const bool stereo = slam_options.mode == SensorMode::kStereo;
+  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence, {options.camera, stereo});
   const size_t first = options.first_frame;
   const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "localize");
   OutputDirOptions output_dir_options;

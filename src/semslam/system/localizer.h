@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <limits>
+#include <string>
 
 #include "semslam/system/slam_system.h"
 
@@ -19,6 +20,7 @@ namespace semslam {
 struct LocalizeOptions {
   std::filesystem::path map;       // map.semslam of an earlier `semslam run`
   std::filesystem::path sequence;  // any sequence OpenSequence reads
+  std::string camera;  // of a KITTI folder (io/sequence.h SequenceOptions::camera); empty: default
   std::filesystem::path output;
   SlamOptions slam;  // mode, features, vocabulary; localization_only is forced
   size_t first_frame = 0;

@@ -193,8 +193,8 @@ nlohmann::json SurfaceJson(const SurfaceScores& e) {
 RunSummary RunSequence(const RunOptions& options) {
   options.Check();
   Stopwatch watch;
-  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence);
   const bool stereo = options.slam.mode == SensorMode::kStereo;
+  const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence, {options.camera, stereo});
   const size_t first = options.first_frame;
   const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "run");
   // Inputs read after SLAM are checked now, so that a malformed file stops the run before its first frame.
@@ -215,9 +215,10 @@ RunSummary RunSequence(const RunOptions& options) {
   output_dir_options.overwrite = options.overwrite;
   const RunOutputDir output_dir(options.output, output_dir_options);
   const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
-  spdlog::info("sequence {} ({}), frames {}..{}, {} mode, camera {}", sequence->name(),
-               sequence->directory().string(), first, end - 1, stereo ? "stereo" : "monocular",
-               sequence->camera().ToString());
+  spdlog::info("sequence {} ({}{}), frames {}..{}, {} mode, camera {}", sequence->name(),
+               sequence->directory().string(),
+               sequence->camera_name().empty() ? "" : ", " + sequence->camera_name(), first, end - 1,
+               stereo ? "stereo" : "monocular", sequence->camera().ToString());
 
   SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
   if (!options.map_in.empty()) slam.LoadMap(options.map_in);
@@ -232,7 +233,8 @@ RunSummary RunSequence(const RunOptions& options) {
   // Per frame: how tracking went, how big the map was (tracking time against map size) and the memory the
   // process held (resident set, MiB).
   std::string tracking_csv = "frame,state,tracking_ms,matched,keyframes,map_points,rss_mib\n";
-  FrameReader frame_reader(*sequence, stereo, options.max_bad_frames_in_row);
+  // A colour camera's frames go to the segmenter in colour and to tracking in grey (one decode for both).
+  FrameReader frame_reader(*sequence, stereo, options.max_bad_frames_in_row, segmenter != nullptr);
   FrameLoopEnd loop;
   for (size_t i = first; i < end; ++i) {
     if (InterruptRequested()) {  // the frame before was finished: stop here and save
@@ -245,7 +247,8 @@ RunSummary RunSequence(const RunOptions& options) {
     const std::optional<FrameImages> images = frame_reader.Read(i);
     size_t keyframes = 0, points = 0;
     if (images) {
-      const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), images->left, images->right);
+      const TrackingResult result =
+          slam.ProcessFrame(i, sequence->Timestamp(i), images->left, images->right, {}, images->color);
       {
         auto lock = slam.map().ReadLock();
         keyframes = slam.map().NumKeyFrames();
@@ -321,6 +324,7 @@ RunSummary RunSequence(const RunOptions& options) {
   nlohmann::json run = {
       {"status", loop.status},
       {"sequence", sequence->directory().string()},
+      {"camera", sequence->camera_name()},
       {"sequence_name", sequence->name()},
       {"mode", stereo ? "stereo" : "mono"},
       {"frames", stats.frames},

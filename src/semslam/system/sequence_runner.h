@@ -17,6 +17,7 @@ namespace semslam {
 
 struct RunOptions {
   std::filesystem::path sequence;
+  std::string camera;  // of a KITTI folder (io/sequence.h SequenceOptions::camera); empty: its default
   std::filesystem::path output;
   SlamOptions slam;
   size_t first_frame = 0;

@@ -155,12 +155,12 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 }
 
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
-                                        const cv::Mat& right, const cv::Mat& mask) {
+                                        const cv::Mat& right, const cv::Mat& mask, const cv::Mat& color) {
   Require(!finished_, "ProcessFrame after Finish");
   if (options_.pacing == Pacing::kRealtime) pacer_.Wait(timestamp);  // no faster than the camera recorded
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
-  if (segmentation_) SubmitForSegmentation(frame_id, left, result);
+  if (segmentation_) SubmitForSegmentation(frame_id, color.empty() ? left : color, result);
   if (result.state == TrackingState::kOk) ++tracked_;
   if (result.reset_requested) ResetMap();
   if (options_.pacing == Pacing::kSynchronous && (result.new_keyframe || result.initialized_now)) {

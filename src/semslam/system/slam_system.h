@@ -93,8 +93,9 @@ class SlamSystem {
   void EnableSegmentation(std::shared_ptr<Segmenter> segmenter);
   std::optional<SegmentationWorkerStats> SegmentationStats() const;
 
+  // `color`: the image the segmenter sees, 8-bit BGR of a colour camera (empty: `left`, grey).
   TrackingResult ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
-                              const cv::Mat& right = {}, const cv::Mat& mask = {});
+                              const cv::Mat& right = {}, const cv::Mat& mask = {}, const cv::Mat& color = {});
   // Lets mapping and loop closing (and a running global BA) finish, then stops the threads.
   void Finish();
 
