@@ -130,6 +130,11 @@ void RunSegment(const SegmentArgs& args) {
 
   SegmenterContext context;
   context.seed = args.seed;
+  if (!images.empty()) {
+    // auto picks its network by whether the images are colour (the first one tells).
+    const cv::Mat first = cv::imread(images[0].string(), cv::IMREAD_UNCHANGED);
+    context.colour_images = first.channels() >= 3;
+  }
   if (truth_dir) {
     context.truth_label_dir = truth_dir;
   } else if (!images.empty() && images[0].parent_path().filename() == "image_0") {

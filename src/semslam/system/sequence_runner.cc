@@ -225,6 +225,7 @@ RunSummary RunSequence(const RunOptions& options) {
   SegmenterContext segmenter_context;
   segmenter_context.truth_label_dir = sequence->LabelDirectory();
   segmenter_context.seed = options.seed;
+  segmenter_context.colour_images = sequence->IsColor();  // auto: SINet for colour, ESPNetv2 for grey
   std::shared_ptr<Segmenter> segmenter = MakeSegmenter(options.segmenter, segmenter_context);
   const std::string segmenter_description = segmenter ? segmenter->Describe() : "none";
   slam.EnableSegmentation(segmenter);
