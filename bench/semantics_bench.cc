@@ -1,6 +1,7 @@
 // Semantics benchmarks: label fusion per keyframe (bar: <= 50 us for 1000 observed points; the paper's data
 // association took 500 us), per-keypoint sampling, turning network scores into distributions, the noise
-// model, and ENet at its native 1024x512 with 2 OpenCV threads (needs ../shared/data).
+// model, ENet at its native 1024x512, and ESPNetv2 and SINet at several KITTI input sizes, with 2 OpenCV threads
+// (needs ../shared/data).
 //   build/<preset>/bench/semantics_bench [--benchmark_filter=Fuse]
 
 #include <benchmark/benchmark.h>
@@ -165,6 +166,37 @@ void BM_Enet_1024x512_2threads(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(segmenter.Segment(image));
 }
 BENCHMARK(BM_Enet_1024x512_2threads)->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
+
+// ESPNetv2 and SINet (our C++ networks with their published Cityscapes weights) on a KITTI 07 frame, 2 OpenCV
+// threads, at network input width range(0) (the frame is scaled to it, aspect ratio kept): the whole
+// Segment() call, preprocessing and the 19-class distribution included.
+void SegmentKittiFrame(benchmark::State& state, const ModelCard& card) {
+  const auto frame = kSharedData / "kitti_odom_07_3dv/sequences/07/image_0/000050.png";
+  if (!std::filesystem::exists(card.file) || !std::filesystem::exists(frame)) {
+    state.SkipWithError("../shared/data (segmentation weights, KITTI 07) missing");
+    return;
+  }
+  DnnSegmenter::Options options;
+  options.threads = 2;
+  DnnSegmenter segmenter(card, options);
+  const cv::Mat image = cv::imread(frame.string(), cv::IMREAD_GRAYSCALE);
+  const cv::Size input = segmenter.NetworkInputSize(image.size());
+  benchmark::DoNotOptimize(segmenter.Segment(image));  // warm-up
+  for (auto _ : state) benchmark::DoNotOptimize(segmenter.Segment(image));
+  state.SetLabel(std::to_string(input.width) + "x" + std::to_string(input.height));
+}
+void BM_EspNetV2_Kitti_2threads(benchmark::State& state) {
+  SegmentKittiFrame(state, EspNetV2CityscapesCard(kSharedData / "segmentation_weights/espnetv2_s_2.0_city_1024x512.pth",
+                                                  static_cast<int>(state.range(0))));
+}
+BENCHMARK(BM_EspNetV2_Kitti_2threads)
+    ->Arg(512)->Arg(768)->Arg(1024)->Arg(1248)->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
+void BM_SiNet_Kitti_2threads(benchmark::State& state) {
+  SegmentKittiFrame(state, SiNetCityscapesCard(kSharedData / "segmentation_weights/sinet_cityscapes.pth",
+                                               static_cast<int>(state.range(0))));
+}
+BENCHMARK(BM_SiNet_Kitti_2threads)
+    ->Arg(768)->Arg(1024)->Arg(1280)->Arg(1536)->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
 
 }  // namespace
 }  // namespace semslam

@@ -102,7 +102,8 @@ void AddRunCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option(
          "--segmenter", args->segmenter,
-         "Keyframe segmentation: none, enet:FILE (ENet Torch7), onnx:CARD.yaml, labels:DIR (label or "
+         "Keyframe segmentation: none, espnetv2:FILE.pth or sinet:FILE.pth (Cityscapes state dicts, e.g. "
+         "../shared/data/segmentation_weights), enet:FILE (ENet Torch7), onnx:CARD.yaml, labels:DIR (label or "
          "probability images), truth-noisy:RATE (the synthetic city's labels with noise); optional "
          ",key=value settings (see models/README.md)")
       ->capture_default_str();

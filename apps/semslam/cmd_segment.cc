@@ -130,6 +130,11 @@ void RunSegment(const SegmentArgs& args) {
 
   SegmenterContext context;
   context.seed = args.seed;
+  if (!images.empty()) {
+    // auto picks its network by whether the images are colour (the first one tells).
+    const cv::Mat first = cv::imread(images[0].string(), cv::IMREAD_UNCHANGED);
+    context.colour_images = first.channels() >= 3;
+  }
   if (truth_dir) {
     context.truth_label_dir = truth_dir;
   } else if (!images.empty() && images[0].parent_path().filename() == "image_0") {
@@ -224,7 +229,8 @@ void AddSegmentCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("segment", "Run a segmenter on images (and score it against ground truth)");
   cmd->add_option(
          "--segmenter", args->segmenter,
-         "enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with optional ,key=value settings")
+         "espnetv2:FILE.pth | sinet:FILE.pth | enet:FILE | onnx:CARD.yaml | labels:DIR | truth-noisy:RATE, with "
+         "optional ,key=value settings (espnetv2/sinet: width=N, threads=N)")
       ->required();
   cmd->add_option("--images", args->images,
                   "Image files or folders (sorted); frame numbers come from the names")

@@ -112,9 +112,12 @@ json RunJson() {
         {"segmented_keyframes", 20},
         {"segmented_frames", 60},
         {"median_ms", 40.0}}},
-      {"label_accuracy", 0.96},
+      {"label_accuracy", 0.94},
+      {"label_accuracy_3d", 0.94},
+      {"label_accuracy_2d", 0.96},
       {"label_evaluation",
-       {{"fused_points",
+       {{"surface_points", {{"accuracy", 0.94}, {"evaluated", 4100}}},
+        {"fused_points",
          {{"accuracy", 0.96},
           {"evaluated", 4900},
           {"per_class", {{"road", {{"accuracy", 0.97}, {"evaluated", 2000}}}}}}},
@@ -272,7 +275,11 @@ TEST(HtmlReport, FullRunHasEverySection) {
   EXPECT_NE(summary.find("/data/city/sequences/00"), std::string::npos);
   EXPECT_NE(summary.find("98 (98.0&nbsp;%)"), std::string::npos);
   EXPECT_NE(summary.find("0.25&nbsp;m RMSE (Sim(3) alignment"), std::string::npos);
-  EXPECT_NE(summary.find("96.0&nbsp;%"), std::string::npos);
+  // The map labels by both measures, each named.
+  EXPECT_NE(summary.find("94.0&nbsp;% of the map points carry the class of the surface they lie on (3D, "
+                         "4&#8239;100 evaluated); the class at their keypoints (2D): 96.0&nbsp;%"),
+            std::string::npos)
+      << summary;
   EXPECT_NE(summary.find("Landmark position error"), std::string::npos);
   // The landmark's error from run.json is matched to its row by name.
   const std::string landmarks = Between(html, "<section id=\"landmarks\">", "</section>");

@@ -161,11 +161,29 @@ void AppendSummary(Page& page, const ReportInputs& in) {
     }
   }
   if (const auto accuracy = f.Number(run, "label_accuracy", "label_accuracy")) {
-    std::string value = FormatPercent(*accuracy) + " of the map points labeled right";
-    if (const json* evaluation = f.Object(run, "label_evaluation", "label_evaluation")) {
+    // Two measures (semantic_evaluation.h): 3D, against the surface each point lies on, when the truth has
+    // depth; 2D, against the truth at the point's keypoints.
+    std::string value;
+    const json* evaluation = f.Object(run, "label_evaluation", "label_evaluation");
+    if (const auto a3 = f.Number(run, "label_accuracy_3d", "label_accuracy_3d")) {
+      value = FormatPercent(*a3) + " of the map points carry the class of the surface they lie on (3D";
+      const json* surface = evaluation ? f.Object(*evaluation, "surface_points", "label_evaluation.surface_points")
+                                       : nullptr;
+      if (const auto n = surface ? f.Integer(*surface, "evaluated", "label_evaluation.surface_points.evaluated")
+                                 : std::nullopt) {
+        value += ", " + GroupThousands(*n) + " evaluated";
+      }
+      value += ")";
+      if (const auto a2 = f.Number(run, "label_accuracy_2d", "label_accuracy_2d")) {
+        value += "; the class at their keypoints (2D): " + FormatPercent(*a2);
+      }
+    } else {
+      value = FormatPercent(*accuracy) + " of the map points labeled right";
+    }
+    if (evaluation) {
       if (const json* fused = f.Object(*evaluation, "fused_points", "label_evaluation.fused_points")) {
         if (const auto n = f.Integer(*fused, "evaluated", "label_evaluation.fused_points.evaluated")) {
-          value += " (" + GroupThousands(*n) + " evaluated)";
+          value += " (" + GroupThousands(*n) + " evaluated in 2D)";
         }
       }
       if (const json* single =

@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "semslam/core/error.h"
+#include "semslam/semantics/torch_networks.h"
+#include "semslam/semantics/torch_state_dict.h"
 
 namespace semslam {
 
@@ -26,9 +28,17 @@ DnnSegmenter::DnnSegmenter(ModelCard card, Options options)
     throw InputError(card_.file, "model file not found (model card '" + card_.name + "')");
   }
   try {
-    network_->net = card_.ResolvedFormat() == ModelCard::Format::kTorch
-                        ? cv::dnn::readNetFromTorch(card_.file.string())
-                        : cv::dnn::readNetFromONNX(card_.file.string());
+    switch (card_.ResolvedFormat()) {
+      case ModelCard::Format::kTorch:
+        network_->net = cv::dnn::readNetFromTorch(card_.file.string());
+        break;
+      case ModelCard::Format::kPth:
+        // A PyTorch state dict: the network is ours (torch_networks.h), the weights are the file's.
+        network_->net = FindTorchArchitecture(card_.architecture)->build(TorchStateDict::Read(card_.file));
+        break;
+      default:
+        network_->net = cv::dnn::readNetFromONNX(card_.file.string());
+    }
   } catch (const cv::Exception& e) {
     throw InputError(card_.file, std::string("OpenCV dnn cannot load the model: ") + e.err);
   }
@@ -41,9 +51,15 @@ DnnSegmenter::~DnnSegmenter() = default;
 
 std::string DnnSegmenter::Describe() const {
   std::ostringstream s;
+  const ModelCard::Format format = card_.ResolvedFormat();
   s << "dnn " << card_.name << " (" << card_.file.string() << ", "
-    << (card_.ResolvedFormat() == ModelCard::Format::kTorch ? "torch" : "onnx") << ", input ";
-  if (card_.input_width > 0) {
+    << (format == ModelCard::Format::kTorch
+            ? "torch"
+            : (format == ModelCard::Format::kPth ? "pth " + card_.architecture : "onnx"))
+    << ", input ";
+  if (card_.input_width > 0 && card_.input_height == 0) {
+    s << "width " << card_.input_width << ", aspect kept";
+  } else if (card_.input_width > 0) {
     s << card_.input_width << "x" << card_.input_height
       << (card_.fixed_size
               ? (card_.resize == ModelCard::Resize::kTile ? " fixed, tiled" : " fixed, stretched")
@@ -56,11 +72,16 @@ std::string DnnSegmenter::Describe() const {
 }
 
 cv::Size DnnSegmenter::NetworkInputSize(cv::Size image_size) const {
-  if (card_.input_width > 0) return {card_.input_width, card_.input_height};
-  const auto round = [&](int v) {
+  const auto round = [&](double v) {
     const int d = card_.size_divisor;
-    return std::max(d, (v + d / 2) / d * d);
+    return std::max(d, static_cast<int>(std::lround(v / d)) * d);
   };
+  if (card_.input_width > 0 && card_.input_height == 0) {
+    // Scaled to the card's width, aspect ratio kept.
+    const double height = static_cast<double>(image_size.height) * card_.input_width / image_size.width;
+    return {round(card_.input_width), round(height)};
+  }
+  if (card_.input_width > 0) return {card_.input_width, card_.input_height};
   return {round(image_size.width), round(image_size.height)};
 }
 
@@ -186,9 +207,22 @@ std::vector<cv::Mat> DnnSegmenter::ScorePlanes(cv::Mat& output) const {
   return planes;
 }
 
+std::vector<cv::Mat> DnnSegmenter::KeptPlanes(cv::Mat& output) const {
+  std::vector<cv::Mat> planes = ScorePlanes(output);
+  std::vector<cv::Mat> kept;
+  for (size_t c = 0; c < planes.size(); ++c) {
+    if (card_.channel_to_train_id[c] != kDropChannel) kept.push_back(planes[c]);
+  }
+  return kept;
+}
+
 Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_index*/) {
   Require(!image.empty(), "DnnSegmenter: empty image");
-  const size_t num_channels = card_.channel_to_train_id.size();
+  std::vector<std::uint8_t> kept_ids;
+  for (std::uint8_t id : card_.channel_to_train_id) {
+    if (id != kDropChannel) kept_ids.push_back(id);
+  }
+  const size_t num_channels = kept_ids.size();
   const cv::Size net_size(card_.input_width, card_.input_height);
   const int tiled_width =
       card_.resize == ModelCard::Resize::kTile
@@ -207,7 +241,7 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
       const int x0 = static_cast<int>(
           std::lround(static_cast<double>(w) * (tiled_width - net_size.width) / std::max(windows - 1, 1)));
       cv::Mat output = Forward(scaled.colRange(x0, x0 + net_size.width));
-      const std::vector<cv::Mat> p = ToProbabilities(ScorePlanes(output), card_.scores);
+      const std::vector<cv::Mat> p = ToProbabilities(KeptPlanes(output), card_.scores);
       if (sum.empty()) {
         out_scale = static_cast<double>(p[0].cols) / net_size.width;
         const cv::Size out_size(static_cast<int>(std::lround(tiled_width * out_scale)), p[0].rows);
@@ -225,7 +259,7 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
       // Never store more cells than the image has pixels.
       if (m.cols > image.cols && m.rows > image.rows) cv::resize(m, m, image.size(), 0, 0, cv::INTER_AREA);
     }
-    return SegmentationFromScores(sum, ScoreKind::kProbabilities, card_.channel_to_train_id, image.size());
+    return SegmentationFromScores(sum, ScoreKind::kProbabilities, kept_ids, image.size());
   }
 
   cv::Mat output = Forward(image);
@@ -249,7 +283,7 @@ Segmentation DnnSegmenter::Segment(const cv::Mat& image, std::int64_t /*frame_in
     }
     return Segmentation::FromLabels(labels, image.size(), 1.0f);
   }
-  return SegmentationFromScores(ScorePlanes(output), card_.scores, card_.channel_to_train_id, image.size());
+  return SegmentationFromScores(KeptPlanes(output), card_.scores, kept_ids, image.size());
 }
 
 }  // namespace semslam

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "semslam/core/error.h"
 #include "semslam/core/yaml_file.h"
 #include "semslam/semantics/class_table.h"
+#include "semslam/semantics/torch_networks.h"
 
 namespace semslam {
 namespace {
@@ -59,6 +61,7 @@ class CardParser {
     if (lower == "none" || lower == "unlabeled" || lower == "ignore" || lower == "-1" || lower == "255") {
       return kNoLabel;
     }
+    if (lower == "drop") return kDropChannel;
     char* end = nullptr;
     const long id = std::strtol(text.c_str(), &end, 10);
     if (end != text.c_str() && *end == '\0') {
@@ -109,8 +112,9 @@ std::string ExpandEnvironment(const std::string& text) {
 
 void ModelCard::Check() const {
   Require(!file.empty(), "model card: 'file' is empty");
-  Require(input_width >= 0 && input_height >= 0 && (input_width > 0) == (input_height > 0),
-          "model card: input width and height must both be positive or both be absent");
+  Require(input_width >= 0 && input_height >= 0 && (input_width > 0 || input_height == 0),
+          "model card: input width and height must both be positive, width alone, or both absent");
+  Require(input_height > 0 || input_width == 0 || !fixed_size, "model card: a fixed input needs a height");
   Require(!fixed_size || input_width > 0, "model card: a fixed input needs width and height");
   Require(resize == Resize::kStretch || fixed_size, "model card: resize: tile needs a fixed input size");
   Require(resize == Resize::kStretch || layout != Layout::kLabels,
@@ -124,7 +128,27 @@ void ModelCard::Check() const {
   }
   Require(!channel_to_train_id.empty(), "model card: no output classes");
   for (std::uint8_t id : channel_to_train_id) {
-    Require(id < kNumClasses || id == kNoLabel, "model card: class ids must be trainIds or none");
+    Require(id < kNumClasses || id == kNoLabel || id == kDropChannel,
+            "model card: class ids must be trainIds, none or drop");
+  }
+  Require(layout != Layout::kLabels || std::find(channel_to_train_id.begin(), channel_to_train_id.end(),
+                                                 kDropChannel) == channel_to_train_id.end(),
+          "model card: a label output cannot drop classes");
+  bool pth = format == Format::kPth;
+  if (format == Format::kAuto) {
+    const std::string ext = Lower(file.extension().string());
+    pth = ext == ".pth" || ext == ".pt";
+  }
+  if (pth) {
+    const TorchArchitecture* a = FindTorchArchitecture(architecture);
+    Require(a != nullptr, "model card: a .pth state dict needs architecture: espnetv2 or sinet (got '" +
+                              architecture + "')");
+    Require(size_divisor % a->size_divisor == 0, "model card: size_divisor must be a multiple of " +
+                                                     std::to_string(a->size_divisor) + " for " +
+                                                     architecture);
+    Require(input_height == 0 || (input_width % a->size_divisor == 0 && input_height % a->size_divisor == 0),
+            "model card: input width and height must be multiples of " + std::to_string(a->size_divisor) +
+                " for " + architecture);
   }
 }
 
@@ -133,8 +157,9 @@ ModelCard::Format ModelCard::ResolvedFormat() const {
   const std::string ext = Lower(file.extension().string());
   if (ext == ".onnx") return Format::kOnnx;
   if (ext == ".net" || ext == ".t7" || ext == ".th") return Format::kTorch;
+  if (ext == ".pth" || ext == ".pt") return Format::kPth;
   throw InvalidArgument("model card: cannot tell the format of '" + file.string() +
-                        "' from its extension; set format: torch|onnx");
+                        "' from its extension; set format: torch|onnx|pth");
 }
 
 ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& base_dir,
@@ -161,12 +186,18 @@ ModelCard ParseModelCard(const std::string& yaml, const std::filesystem::path& b
       card.format = ModelCard::Format::kTorch;
     } else if (f == "onnx") {
       card.format = ModelCard::Format::kOnnx;
+    } else if (f == "pth" || f == "pytorch") {
+      card.format = ModelCard::Format::kPth;
     } else if (f == "auto") {
       card.format = ModelCard::Format::kAuto;
     } else {
-      p.Fail(root["format"], "format", "must be torch, onnx or auto");
+      p.Fail(root["format"], "format", "must be torch, onnx, pth or auto");
     }
   }
+  if (root["architecture"])
+    card.architecture = Lower(p.Get<std::string>(root["architecture"], "architecture"));
+  if (const TorchArchitecture* a = FindTorchArchitecture(card.architecture))
+    card.size_divisor = a->size_divisor;
 
   if (const YAML::Node input = root["input"]) {
     if (!input.IsMap()) p.Fail(input, "input", "must be a map");
@@ -249,6 +280,39 @@ ModelCard ReadModelCard(const std::filesystem::path& path) {
   std::stringstream text;
   text << in.rdbuf();
   return ParseModelCard(text.str(), std::filesystem::absolute(path).parent_path(), path);
+}
+
+namespace {
+
+ModelCard TorchCityscapesCard(const std::string& name, const std::string& architecture,
+                              const std::filesystem::path& weights, int width) {
+  ModelCard card;
+  card.name = name;
+  card.file = weights;
+  card.format = ModelCard::Format::kPth;
+  card.architecture = architecture;
+  card.input_width = width;
+  card.size_divisor = FindTorchArchitecture(architecture)->size_divisor;
+  card.rgb = true;
+  card.scale = 1.0 / 255.0;
+  card.mean = {0.485, 0.456, 0.406};
+  card.stddev = {0.229, 0.224, 0.225};
+  card.layout = ModelCard::Layout::kNchw;
+  card.scores = ScoreKind::kLogits;
+  card.channel_to_train_id = CityscapesIdentity();
+  return card;
+}
+
+}  // namespace
+
+ModelCard EspNetV2CityscapesCard(const std::filesystem::path& weights, int width) {
+  ModelCard card = TorchCityscapesCard("espnetv2-cityscapes", "espnetv2", weights, width > 0 ? width : 1024);
+  card.channel_to_train_id.push_back(kDropChannel);  // background
+  return card;
+}
+
+ModelCard SiNetCityscapesCard(const std::filesystem::path& weights, int width) {
+  return TorchCityscapesCard("sinet-cityscapes", "sinet", weights, width > 0 ? width : 1280);
 }
 
 ModelCard EnetCityscapesCard(const std::filesystem::path& weights) {

