@@ -120,4 +120,21 @@ std::string SuggestCorrections(const CLI::App& app, const std::vector<std::strin
   return text;
 }
 
+void AddCameraAndOutputOptions(CLI::App& cmd, CameraAndOutputArgs& args) {
+  cmd.add_option(
+      "--camera", args.camera,
+      "Camera of a KITTI folder: image_00..image_03 of a raw drive, image_0..image_3 of an odometry sequence "
+      "(default image_00 / image_0); stereo uses the pair 00/01 or 02/03 (0/1 or 2/3)");
+  cmd.add_option("--out", args.out,
+                 "Output folder (created if missing). A folder holding an earlier run is refused unless "
+                 "--overwrite is given; two commands never write into one folder at once")
+      ->required();
+  cmd.add_flag("--overwrite", args.overwrite,
+               "Replace the earlier run in --out: everything in that folder is removed before the first frame");
+  cmd.add_option("--max-bad-frames", args.max_bad_frames,
+                 "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
+                 "the command, which still saves what it did")
+      ->capture_default_str();
+}
+
 }  // namespace semslam::cli

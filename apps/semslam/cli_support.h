@@ -33,6 +33,16 @@ std::vector<std::string> LogHeader();
 // or option close to a known one ("; " between them), or "" when nothing is close.
 std::string SuggestCorrections(const CLI::App& app, const std::vector<std::string>& unexpected);
 
+// The options `run` and `localize` share: --camera, and the output folder's --out, --overwrite and
+// --max-bad-frames.
+struct CameraAndOutputArgs {
+  std::string camera;
+  std::string out;
+  bool overwrite = false;
+  size_t max_bad_frames = 10;
+};
+void AddCameraAndOutputOptions(CLI::App& cmd, CameraAndOutputArgs& args);
+
 // Edit distance (insertions, deletions, substitutions, transpositions of neighbours).
 size_t EditDistance(const std::string& a, const std::string& b);
 

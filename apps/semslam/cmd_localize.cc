@@ -15,19 +15,15 @@
 namespace semslam::cli {
 namespace {
 
-struct LocalizeArgs {
+struct LocalizeArgs : CameraAndOutputArgs {
   std::string map;
   std::string sequence;
-  std::string camera;
-  std::string out;
   std::string mode = "mono";
   std::string frames;
   std::string config;
   std::string vocabulary;
   size_t landmarks = 3;  // --nearest-landmarks (a count; `run --landmarks` is a file)
   bool quiet = false;
-  bool overwrite = false;
-  size_t max_bad_frames = 10;
 };
 
 void Run(const LocalizeArgs& args) {
@@ -64,20 +60,7 @@ void AddLocalizeCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--sequence", args->sequence, "Sequence to localize (any folder semslam run reads)")
       ->required();
-  cmd->add_option(
-      "--camera", args->camera,
-      "Camera of a KITTI folder: image_00..image_03 of a raw drive, image_0..image_3 of an odometry sequence "
-      "(default image_00 / image_0); stereo uses the pair 00/01 or 02/03 (0/1 or 2/3)");
-  cmd->add_option("--out", args->out,
-                  "Output folder (created if missing). A folder holding an earlier run is refused unless "
-                  "--overwrite is given; two commands never write into one folder at once")
-      ->required();
-  cmd->add_flag("--overwrite", args->overwrite,
-                "Replace the earlier run in --out: everything in that folder is removed before the first frame");
-  cmd->add_option("--max-bad-frames", args->max_bad_frames,
-                  "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
-                  "the command, which still saves what it did")
-      ->capture_default_str();
+  AddCameraAndOutputOptions(*cmd, *args);
   cmd->add_option("--mode", args->mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "stereo"}))
       ->capture_default_str();

@@ -17,10 +17,8 @@
 namespace semslam::cli {
 namespace {
 
-struct RunArgs {
+struct RunArgs : CameraAndOutputArgs {
   std::string sequence;
-  std::string camera;
-  std::string out;
   std::string mode = "mono";
   std::string frames;
   std::string config;
@@ -37,8 +35,6 @@ struct RunArgs {
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
-  bool overwrite = false;
-  size_t max_bad_frames = 10;
 };
 
 void Run(const RunArgs& args) {
@@ -78,20 +74,7 @@ void AddRunCommand(CLI::App& app) {
          "KITTI odometry sequence folder, KITTI raw drive, synthetic city output, or image folder with "
          "camera.yaml")
       ->required();
-  cmd->add_option(
-      "--camera", args->camera,
-      "Camera of a KITTI folder: image_00..image_03 of a raw drive, image_0..image_3 of an odometry sequence "
-      "(default image_00 / image_0); stereo uses the pair 00/01 or 02/03 (0/1 or 2/3)");
-  cmd->add_option("--out", args->out,
-                  "Output folder (created if missing). A folder holding an earlier run is refused unless "
-                  "--overwrite is given; two commands never write into one folder at once")
-      ->required();
-  cmd->add_flag("--overwrite", args->overwrite,
-                "Replace the earlier run in --out: everything in that folder is removed before the first frame");
-  cmd->add_option("--max-bad-frames", args->max_bad_frames,
-                  "Unreadable or damaged frames are skipped with a warning; more than this many in a row stop "
-                  "the command, which still saves what it did")
-      ->capture_default_str();
+  AddCameraAndOutputOptions(*cmd, *args);
   cmd->add_option("--mode", args->mode, "Sensor mode")
       ->check(CLI::IsMember({"mono", "stereo"}))
       ->capture_default_str();

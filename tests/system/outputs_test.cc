@@ -174,7 +174,9 @@ TEST(Outputs, FormatsDocNamesEveryFileOfTheRunFolder) {
     EXPECT_NE(formats.find("`" + relative + "`"), std::string::npos)
         << relative << " is not named (in backquotes) in docs/formats.md";
   }
-  EXPECT_GE(files, 20u);
+  // Not an empty folder: 26 files with a georeference; a run whose 5 GPS samples do not fix one (the clang build's
+  // monocular run) writes 18.
+  EXPECT_GE(files, 15u);
 }
 
 TEST(Outputs, ReportCommandRebuildsTheReport) {
