@@ -42,8 +42,10 @@ struct LoopCloserOptions {
   // Stereo only (a metric map, whose odometry drifts by a fraction of a percent): a loop within one map may
   // move the current keyframe by at most this share of the path driven since the matched keyframe, plus
   // stereo_correction_slack_m. A larger jump means a place that looks the same elsewhere (towns repeat).
-  // A monocular map's scale drifts too much for such a bound, and maps to merge share no odometry.
-  double max_stereo_correction_ratio = 0.1;
+  // 3 % is several times what stereo odometry drifts on a busy machine, and keeps a look-alike block one
+  // street away out for the first kilometre. A monocular map's scale drifts too much for such a bound, and
+  // maps to merge share no odometry.
+  double max_stereo_correction_ratio = 0.03;
   double stereo_correction_slack_m = 3.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
@@ -57,6 +59,7 @@ struct LoopEvent {
   std::uint64_t query_keyframe = 0;
   std::uint64_t matched_keyframe = 0;
   double query_timestamp = 0.0;
+  double matched_timestamp = 0.0;  // when the matched place was seen
   int matches = 0;
   int verified_neighbours = 0;  // covisible keyframes that confirmed the place
   double scale = 1.0;           // of the correction (monocular drift) or of the merged map

@@ -48,10 +48,10 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   ScopedTimer timer(timing_, "loop_correction");
   const bool merge = matched_keyframe_->map_id() != current->map_id();
   spdlog::info(
-      "{} detected: keyframe {} (map {}) matches keyframe {} (map {}), {} matches, confirmed by {} "
-      "neighbours",
-      merge ? "map merge" : "loop", current->id(), current->map_id(), matched_keyframe_->id(),
-      matched_keyframe_->map_id(), last_matches_, last_verified_);
+      "{} detected: keyframe {} (map {}, t {:.1f} s) matches keyframe {} (map {}, t {:.1f} s), {} matches, "
+      "confirmed by {} neighbours",
+      merge ? "map merge" : "loop", current->id(), current->map_id(), current->timestamp(), matched_keyframe_->id(),
+      matched_keyframe_->map_id(), matched_keyframe_->timestamp(), last_matches_, last_verified_);
   mapper_.RequestStop();
   StopGlobalBundleAdjustment();
   while (!mapper_.IsStopped() && !mapper_.IsFinished())
@@ -61,6 +61,7 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   event.query_keyframe = current->id();
   event.matched_keyframe = matched_keyframe_->id();
   event.query_timestamp = current->timestamp();
+  event.matched_timestamp = matched_keyframe_->timestamp();
   event.matches = last_matches_;
   event.verified_neighbours = last_verified_;
   event.scale = current_from_world_.scale;

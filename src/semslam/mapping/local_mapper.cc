@@ -89,7 +89,7 @@ void LocalMapper::WaitForQueueAtMost(size_t n) {
 
 void LocalMapper::RequestStop() {
   std::lock_guard lock(stop_mutex_);
-  stop_requested_ = true;
+  ++stop_requests_;
   abort_ba_ = true;
   queue_cv_.notify_all();
 }
@@ -101,13 +101,18 @@ bool LocalMapper::IsStopped() const {
 
 bool LocalMapper::StopRequested() const {
   std::lock_guard lock(stop_mutex_);
-  return stop_requested_;
+  return stop_requests_ > 0;
 }
 
 void LocalMapper::Release() {
-  std::lock_guard lock(stop_mutex_);
-  stopped_ = false;
-  stop_requested_ = false;
+  {
+    std::lock_guard lock(stop_mutex_);
+    if (stop_requests_ > 0) --stop_requests_;
+    if (stop_requests_ > 0) return;  // another holder still needs the mapper stopped
+    stopped_ = false;
+  }
+  // Taking the queue mutex orders this with the stopped thread's check of IsStopped() before it waits.
+  { std::lock_guard lock(queue_mutex_); }
   queue_cv_.notify_all();
 }
 
@@ -120,7 +125,7 @@ bool LocalMapper::SetNotStop(bool value) {
 
 bool LocalMapper::StopIfRequested() {
   std::lock_guard lock(stop_mutex_);
-  if (stop_requested_ && !not_stop_) {
+  if (stop_requests_ > 0 && !not_stop_) {
     stopped_ = true;
     return true;
   }

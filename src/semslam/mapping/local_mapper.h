@@ -57,7 +57,9 @@ class LocalMapper {
   // Blocks until at most `n` keyframes wait in the queue (the mapper is working through them).
   void WaitForQueueAtMost(size_t n);
 
-  // Pause protocol for the loop closer: RequestStop(), wait for IsStopped(), work, Release().
+  // Pause protocol for the loop closer: RequestStop(), wait for IsStopped(), work, Release(). Requests are
+  // counted: the mapper runs again only when every holder has released it (a loop correction and the global
+  // BA of the previous loop may hold it at once; one clearing the other's request deadlocked the loop closer).
   void RequestStop();
   bool IsStopped() const;
   bool StopRequested() const;
@@ -103,7 +105,7 @@ class LocalMapper {
   std::atomic<bool> finished_{false};
 
   mutable std::mutex stop_mutex_;
-  bool stop_requested_ = false;
+  int stop_requests_ = 0;  // holders of the pause (the loop closer, its global BA, a map reset)
   bool stopped_ = false;
   bool not_stop_ = false;
   std::atomic<bool> reset_requested_{false};

@@ -26,6 +26,7 @@ nlohmann::json AtlasJson(const SlamSystem& slam) {
     merges.push_back({{"query_keyframe", e.query_keyframe},
                       {"matched_keyframe", e.matched_keyframe},
                       {"timestamp", e.query_timestamp},
+                      {"matched_timestamp", e.matched_timestamp},
                       {"merged_map", e.map_id},
                       {"into_map", e.matched_map_id},
                       {"matches", e.matches},

@@ -386,6 +386,7 @@ RunSummary RunSequence(const RunOptions& options) {
     loops.push_back({{"query_keyframe", e.query_keyframe},
                      {"matched_keyframe", e.matched_keyframe},
                      {"timestamp", e.query_timestamp},
+                     {"matched_timestamp", e.matched_timestamp},
                      {"matches", e.matches},
                      {"scale", e.scale},
                      {"correction_m", e.correction_m}});

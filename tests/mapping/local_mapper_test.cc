@@ -1,0 +1,81 @@
+// The local mapper's pause protocol, which the loop closer, its global BA and a map reset share.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <functional>
+#include <thread>
+
+#include "semslam/core/timing.h"
+#include "semslam/map/map.h"
+#include "semslam/mapping/local_mapper.h"
+#include "semslam/place/keyframe_database.h"
+#include "semslam/place/vocabulary.h"
+
+namespace semslam {
+namespace {
+
+bool WaitFor(const std::function<bool()>& condition) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+TEST(LocalMapperPause, RunsAgainOnlyWhenEveryHolderReleasedIt) {
+  Map map;
+  const Vocabulary vocabulary;
+  KeyFrameDatabase database(1);
+  TimingRegistry timing;
+  LocalMapper mapper(LocalMapperOptions{}, map, vocabulary, database, timing);
+  mapper.Start();
+
+  // A loop correction pauses the mapper while the previous loop's global BA holds it too: the BA's release
+  // must not let the mapper run under the correction (it used to clear the other request, and the
+  // correction then waited forever for a stop that never came).
+  mapper.RequestStop();
+  ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
+  mapper.RequestStop();
+  mapper.Release();
+  EXPECT_TRUE(mapper.StopRequested());
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_TRUE(mapper.IsStopped());
+  EXPECT_FALSE(mapper.SetNotStop(true)) << "tracking must not insert a keyframe into a paused mapper";
+
+  mapper.Release();
+  EXPECT_FALSE(mapper.StopRequested());
+  ASSERT_TRUE(WaitFor([&] { return !mapper.IsStopped(); }));
+  EXPECT_TRUE(mapper.SetNotStop(true));
+  mapper.SetNotStop(false);
+
+  // And it can be paused again, then finishes.
+  mapper.RequestStop();
+  ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
+  mapper.Release();
+  mapper.RequestFinish();
+  mapper.Join();
+  EXPECT_TRUE(mapper.IsFinished());
+}
+
+TEST(LocalMapperPause, AReleaseWithoutARequestChangesNothing) {
+  Map map;
+  const Vocabulary vocabulary;
+  KeyFrameDatabase database(1);
+  TimingRegistry timing;
+  LocalMapper mapper(LocalMapperOptions{}, map, vocabulary, database, timing);
+  mapper.Start();
+  mapper.Release();
+  EXPECT_FALSE(mapper.StopRequested());
+  mapper.RequestStop();
+  ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
+  mapper.Release();
+  ASSERT_TRUE(WaitFor([&] { return !mapper.IsStopped(); }));
+  mapper.RequestFinish();
+  mapper.Join();
+  EXPECT_TRUE(mapper.IsFinished());
+}
+
+}  // namespace
+}  // namespace semslam
