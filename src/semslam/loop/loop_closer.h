@@ -40,10 +40,11 @@ struct LoopCloserOptions {
   int min_verified_neighbours = 2;
   int verification_matches = 20;
   // Stereo only (a metric map, whose odometry drifts by a fraction of a percent): a loop within one map may
-  // move the current keyframe by at most this share of the path driven since the matched keyframe, plus
+  // move the current keyframe by at most this share of the odometry between it and the matched keyframe
+  // (the shortest chain of essential-graph links, see KeyFrameGraphDistance), plus
   // stereo_correction_slack_m. A larger jump means a place that looks the same elsewhere (towns repeat).
-  // 3 % is several times what stereo odometry drifts on a busy machine, and keeps a look-alike block one
-  // street away out for the first kilometre. A monocular map's scale drifts too much for such a bound, and
+  // 3 % is several times what stereo odometry drifts on a busy machine, and keeps out a look-alike block
+  // one street away while the odometry between the two is under a kilometre. A monocular map's scale drifts too much for such a bound, and
   // maps to merge share no odometry.
   double max_stereo_correction_ratio = 0.03;
   double stereo_correction_slack_m = 3.0;
