@@ -24,13 +24,19 @@ bool WaitFor(const std::function<bool()>& condition) {
   return true;
 }
 
-TEST(LocalMapperPause, RunsAgainOnlyWhenEveryHolderReleasedIt) {
+// A started mapper over an empty map.
+class LocalMapperPause : public ::testing::Test {
+ protected:
+  LocalMapperPause() { mapper.Start(); }
+
   Map map;
   const Vocabulary vocabulary;
-  KeyFrameDatabase database(1);
+  KeyFrameDatabase database{1};
   TimingRegistry timing;
-  LocalMapper mapper(LocalMapperOptions{}, map, vocabulary, database, timing);
-  mapper.Start();
+  LocalMapper mapper{LocalMapperOptions{}, map, vocabulary, database, timing};
+};
+
+TEST_F(LocalMapperPause, RunsAgainOnlyWhenEveryHolderReleasedIt) {
 
   // A loop correction pauses the mapper while the previous loop's global BA holds it too: the BA's release
   // must not let the mapper run under the correction (it used to clear the other request, and the
@@ -59,13 +65,7 @@ TEST(LocalMapperPause, RunsAgainOnlyWhenEveryHolderReleasedIt) {
   EXPECT_TRUE(mapper.IsFinished());
 }
 
-TEST(LocalMapperPause, AReleaseWithoutARequestChangesNothing) {
-  Map map;
-  const Vocabulary vocabulary;
-  KeyFrameDatabase database(1);
-  TimingRegistry timing;
-  LocalMapper mapper(LocalMapperOptions{}, map, vocabulary, database, timing);
-  mapper.Start();
+TEST_F(LocalMapperPause, AReleaseWithoutARequestChangesNothing) {
   mapper.Release();
   EXPECT_FALSE(mapper.StopRequested());
   mapper.RequestStop();
