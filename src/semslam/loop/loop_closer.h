@@ -44,8 +44,8 @@ struct LoopCloserOptions {
   // (the shortest chain of essential-graph links, see KeyFrameGraphDistance), plus
   // stereo_correction_slack_m. A larger jump means a place that looks the same elsewhere (towns repeat).
   // 3 % is several times what stereo odometry drifts on a busy machine, and keeps out a look-alike block
-  // one street away while the odometry between the two is under a kilometre. A monocular map's scale drifts too much for such a bound, and
-  // maps to merge share no odometry.
+  // one street away while the odometry between the two is under a kilometre. A monocular map's scale
+  // drifts too much for such a bound, and maps to merge share no odometry.
   double max_stereo_correction_ratio = 0.03;
   double stereo_correction_slack_m = 3.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
