@@ -16,7 +16,9 @@ double KeyFrameGraphDistance(const KeyFrame& from, const KeyFrame& to, int min_c
   distance[&from] = 0.0;
   open.emplace(0.0, &from);
   while (!open.empty()) {
-    const auto [d, kf] = open.top();
+    // Plain copies: clang 14 cannot capture structured bindings in the lambda below.
+    const double d = open.top().first;
+    const KeyFrame* kf = open.top().second;
     open.pop();
     if (kf == &to) return d;
     if (d > distance[kf]) continue;  // a shorter chain reached it already
