@@ -9,29 +9,32 @@
 
 namespace semslam {
 
+nlohmann::json LoopEventJson(const LoopEvent& e) {
+  return {{"query_keyframe", e.query_keyframe},
+          {"matched_keyframe", e.matched_keyframe},
+          {"timestamp", e.query_timestamp},
+          {"matched_timestamp", e.matched_timestamp},
+          {"matches", e.matches},
+          {"scale", e.scale}};
+}
+
 nlohmann::json AtlasJson(const SlamSystem& slam) {
   const SlamStatistics stats = slam.Statistics();
+  const std::map<std::uint32_t, size_t> frames_per_map = slam.TrackedFramesPerMap();
   const std::uint32_t main = slam.MainMapId();
-  std::map<std::uint32_t, size_t> frames_per_map;
   size_t unmerged = 0;
-  for (const FramePose& pose : slam.AllFramePoses()) {
-    if (pose.predicted) continue;
-    ++frames_per_map[pose.map_id];
-    if (pose.map_id != main) ++unmerged;
-  }
   nlohmann::json per_map = nlohmann::json::object();
-  for (const auto& [map_id, frames] : frames_per_map) per_map[std::to_string(map_id)] = frames;
+  for (const auto& [map_id, frames] : frames_per_map) {
+    per_map[std::to_string(map_id)] = frames;
+    if (map_id != main) unmerged += frames;
+  }
   nlohmann::json merges = nlohmann::json::array();
   for (const LoopEvent& e : slam.Merges()) {
-    merges.push_back({{"query_keyframe", e.query_keyframe},
-                      {"matched_keyframe", e.matched_keyframe},
-                      {"timestamp", e.query_timestamp},
-                      {"matched_timestamp", e.matched_timestamp},
-                      {"merged_map", e.map_id},
-                      {"into_map", e.matched_map_id},
-                      {"matches", e.matches},
-                      {"verified_neighbours", e.verified_neighbours},
-                      {"scale", e.scale}});
+    nlohmann::json merge = LoopEventJson(e);
+    merge["merged_map"] = e.map_id;
+    merge["into_map"] = e.matched_map_id;
+    merge["verified_neighbours"] = e.verified_neighbours;
+    merges.push_back(std::move(merge));
   }
   nlohmann::json sessions = nlohmann::json::array();
   {

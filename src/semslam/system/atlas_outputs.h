@@ -9,6 +9,10 @@
 
 namespace semslam {
 
+// A loop or merge as run.json gives it: {"query_keyframe", "matched_keyframe", "timestamp" (the query's),
+// "matched_timestamp", "matches", "scale"}; callers add what is particular to loops or merges.
+nlohmann::json LoopEventJson(const LoopEvent& e);
+
 // {"count", "started", "merges", "main_map", "frames_per_map": {id: frames}, "unmerged_frames",
 //  "merge_events": [...], "sessions": [...]} after Finish().
 nlohmann::json AtlasJson(const SlamSystem& slam);

@@ -127,8 +127,7 @@ long long FirstTrackedFrame(const SlamSystem& slam) {
 }
 
 // A map that never started, or started late, says so.
-void WarnAboutInitialization(const SlamSystem& slam, size_t first, size_t end) {
-  const long long first_tracked = FirstTrackedFrame(slam);
+void WarnAboutInitialization(long long first_tracked, size_t first, size_t end) {
   if (first_tracked < 0) {
     spdlog::warn(
         "no map was started: none of the {} frames was tracked (too little texture or parallax, or "
@@ -314,7 +313,8 @@ RunSummary RunSequence(const RunOptions& options) {
   progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,
                               stats.frames, stats.keyframes, stats.map_points, stats.loops));
 
-  WarnAboutInitialization(slam, first, end);
+  const long long first_tracked = FirstTrackedFrame(slam);
+  WarnAboutInitialization(first_tracked, first, end);
   const Trajectory trajectory = slam.FrameTrajectory();
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteFramesCsv(options.output / "frames.csv", slam);
@@ -364,7 +364,7 @@ RunSummary RunSequence(const RunOptions& options) {
       {"tracked", stats.tracked},
       {"with_pose", stats.with_pose},
       {"predicted", stats.predicted},
-      {"first_tracked_frame", FirstTrackedFrame(slam)},
+      {"first_tracked_frame", first_tracked},
       {"keyframes", stats.keyframes},
       {"points", stats.map_points},
       {"keyframes_created", stats.keyframes_created},
@@ -383,13 +383,9 @@ RunSummary RunSequence(const RunOptions& options) {
                              {"identity", kitti.Count(PoseSource::kNone)}};
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopEvent& e : slam.Loops()) {
-    loops.push_back({{"query_keyframe", e.query_keyframe},
-                     {"matched_keyframe", e.matched_keyframe},
-                     {"timestamp", e.query_timestamp},
-                     {"matched_timestamp", e.matched_timestamp},
-                     {"matches", e.matches},
-                     {"scale", e.scale},
-                     {"correction_m", e.correction_m}});
+    nlohmann::json event = LoopEventJson(e);
+    event["correction_m"] = e.correction_m;
+    loops.push_back(std::move(event));
   }
   run["loop_events"] = loops;
   run["maps"] = AtlasJson(slam);

@@ -277,14 +277,18 @@ std::vector<FramePose> SlamSystem::AllFramePoses() const {
   return poses;
 }
 
-std::uint32_t SlamSystem::MainMapId() const {
+std::map<std::uint32_t, size_t> SlamSystem::TrackedFramesPerMap() const {
   std::map<std::uint32_t, size_t> frames;
   for (const FramePose& pose : AllFramePoses()) {
     if (!pose.predicted) ++frames[pose.map_id];
   }
+  return frames;
+}
+
+std::uint32_t SlamSystem::MainMapId() const {
   std::uint32_t main = 0;
   size_t most = 0;
-  for (const auto& [map_id, count] : frames) {
+  for (const auto& [map_id, count] : TrackedFramesPerMap()) {
     if (count > most) {
       most = count;
       main = map_id;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <opencv2/core/mat.hpp>
@@ -114,6 +115,8 @@ class SlamSystem {
 
   // The map most of this run's frames were tracked in (after merges), whose frame the trajectories use.
   std::uint32_t MainMapId() const;
+  // Frames of this run with a pose that is not a prediction, by map id.
+  std::map<std::uint32_t, size_t> TrackedFramesPerMap() const;
   // Every frame of this run with a pose in the main map (tracked, or interpolated at initialization;
   // world_from_camera), following its reference keyframe's current pose.
   Trajectory FrameTrajectory() const;

@@ -102,20 +102,23 @@ void Tracker::SetMapLoaded() {
   state_ = TrackingState::kLost;
 }
 
-void Tracker::Reset() {
+void Tracker::ForgetTrackingState() {
   state_ = TrackingState::kNotInitialized;
   last_frame_.reset();
-  init_frame_.reset();
-  init_between_frames_.clear();
   velocity_.reset();
-  last_keyframe_ = nullptr;
-  reference_keyframe_ = nullptr;
+  lost_since_.reset();
+  map_loaded_ = false;
+  last_keyframe_ = reference_keyframe_ = nullptr;
   local_keyframes_.clear();
   local_points_.clear();
-  lost_since_.reset();
+}
+
+void Tracker::Reset() {
+  ForgetTrackingState();
+  init_frame_.reset();
+  init_between_frames_.clear();
   last_tracked_reference_ = nullptr;
   last_velocity_.reset();
-  map_loaded_ = false;
 }
 
 std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
@@ -267,7 +270,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     frames_since_tracked_ = 0;
   } else {
     ++frames_since_tracked_;
-    PredictPose(frame, record);
+    PredictPose(record);
   }
   records_.push_back(record);
   result.state = state_;

@@ -150,7 +150,10 @@ class Tracker {
   // Lost for good: starts a new map (stereo initializes it from `frame` at once).
   void StartNewMap(Frame& frame, TrackingResult& result);
   // The record of a frame without a tracked pose: the motion model's prediction, when there is one.
-  void PredictPose(const Frame& frame, FrameRecord& record) const;
+  void PredictPose(FrameRecord& record) const;
+  // Back to "not initialized" in the active map: no last frame, motion, keyframes or local map. The last
+  // tracked pose stays (lost frames are still predicted from it) unless Reset() drops it too.
+  void ForgetTrackingState();
   // Frames between the two a monocular map was initialized from get poses in it: tracked against the second
   // keyframe from a pose interpolated between the two, or that interpolated pose.
   void PoseInitializationFrames(KeyFrame* first, KeyFrame* second);

@@ -20,22 +20,14 @@ void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
                frame.id(), frame.timestamp() - lost_since_.value_or(frame.timestamp()), old_map, new_map);
   ++num_new_maps_;
   result.new_map = true;
-  state_ = TrackingState::kNotInitialized;
-  last_frame_.reset();
-  velocity_.reset();
-  lost_since_.reset();
-  map_loaded_ = false;
-  last_keyframe_ = reference_keyframe_ = nullptr;
-  local_keyframes_.clear();
-  local_points_.clear();
+  ForgetTrackingState();
   if (!options_.monocular && InitializeStereo(frame)) {
     state_ = TrackingState::kOk;
     result.initialized_now = true;
   }
 }
 
-void Tracker::PredictPose(const Frame& frame, FrameRecord& record) const {
-  (void)frame;
+void Tracker::PredictPose(FrameRecord& record) const {
   if (last_tracked_reference_ == nullptr) return;
   Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
   if (last_velocity_) {
@@ -64,7 +56,7 @@ bool Tracker::Relocalize(Frame& frame) {
   if (last_reference != nullptr) {
     relocalization.map_id = last_reference->map_id();
     FrameRecord predicted;
-    PredictPose(frame, predicted);
+    PredictPose(predicted);
     const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(predicted);
     if (camera_from_world) {
       const Eigen::Vector3d center = camera_from_world->Inverse().translation;
