@@ -44,6 +44,8 @@ void TrackerOptions::Check() const {
           "tracker: init_match_max_level and init_match_level_difference must be >= 0");
   Require(relocalization_timeout_s >= 0, "tracker: relocalization_timeout_s must be >= 0");
   Require(min_keyframes_to_keep_map >= 1, "tracker: min_keyframes_to_keep_map must be >= 1");
+  Require(motion_model_min_kept_ratio >= 0 && motion_model_min_kept_ratio <= 1,
+          "tracker: motion_model_min_kept_ratio must be in [0, 1]");
 }
 
 const char* ToString(PoseProvenance source) {
@@ -192,10 +194,9 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
         if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
       }
       if (!velocity_ || map_changed || frame.id() < last_relocalization_frame_ + 2) {
-        ok = TrackReferenceKeyFrame(frame);
+        ok = TrackReferenceKeyFrame(frame) > 0;
       } else {
-        ok = TrackWithMotionModel(frame);
-        if (!ok) ok = TrackReferenceKeyFrame(frame);
+        ok = TrackWithMotionModelOrReference(frame);
       }
     } else {
       ok = Relocalize(frame);
@@ -359,19 +360,20 @@ int Tracker::OptimizeFramePose(Frame& frame) {
   return inliers;
 }
 
-bool Tracker::TrackReferenceKeyFrame(Frame& frame) {
+int Tracker::TrackReferenceKeyFrame(Frame& frame) {
   ComputeBow(frame);
   std::vector<MapPoint*> matches;
   SearchByBow(*reference_keyframe_, frame, matches, 0.7f);
   frame.map_points = matches;
-  if (DropDynamicMatches(frame) < 15) return false;
+  if (DropDynamicMatches(frame) < 15) return 0;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   frame.SetPose(last_frame_->camera_from_world());
   OptimizeFramePose(frame);
-  return DiscardOutliers(frame) >= 10;
+  const int inliers = DiscardOutliers(frame);
+  return inliers >= 10 ? inliers : 0;
 }
 
-bool Tracker::TrackWithMotionModel(Frame& frame) {
+int Tracker::TrackWithMotionModel(Frame& frame) {
   frame.SetPose(*velocity_ * last_frame_->camera_from_world());
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
   const float radius = options_.monocular ? 15.0f : 7.0f;
@@ -382,10 +384,31 @@ bool Tracker::TrackWithMotionModel(Frame& frame) {
     SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
     n = DropDynamicMatches(frame);
   }
-  if (n < 20) return false;
+  if (n < 20) return 0;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   OptimizeFramePose(frame);
-  return DiscardOutliers(frame) >= 10;
+  const int inliers = DiscardOutliers(frame);
+  return inliers >= 10 ? inliers : 0;
+}
+
+bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
+  const int predicted = TrackWithMotionModel(frame);
+  if (predicted == 0) return TrackReferenceKeyFrame(frame) > 0;
+  const auto last_points = static_cast<double>(std::count_if(
+      last_frame_->map_points.begin(), last_frame_->map_points.end(), [](const MapPoint* p) { return p != nullptr; }));
+  if (predicted >= options_.motion_model_min_kept_ratio * last_points) return true;
+  const Rigid3d predicted_pose = frame.camera_from_world();
+  std::vector<MapPoint*> predicted_points = frame.map_points;
+  const int unpredicted = TrackReferenceKeyFrame(frame);
+  if (unpredicted > predicted) {
+    spdlog::info("frame {}: the motion model kept {} of {} points, the reference keyframe {}: its pose is kept",
+                  frame.id(), predicted, last_points, unpredicted);
+    return true;
+  }
+  frame.SetPose(predicted_pose);
+  frame.map_points = std::move(predicted_points);
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  return true;
 }
 
 void Tracker::UpdateLocalMap(Frame& frame) {

@@ -58,6 +58,10 @@ struct TrackerOptions {
   double relocalization_timeout_s = 1.0;
   // A map lost with at most this many keyframes is given up (discarded) instead of kept.
   int min_keyframes_to_keep_map = 6;
+  // When the motion model keeps fewer than this share of the last frame's points, the motion changed (a stop,
+  // a reversal) and the prediction may hold a wrong pose that far points agree with: the frame is also
+  // matched to its reference keyframe without prediction, and the pose with more inliers is kept.
+  double motion_model_min_kept_ratio = 0.5;
 
   void Check() const;
 };
@@ -143,8 +147,12 @@ class Tracker {
                                                    const cv::Mat& mask, bool initialization);
   bool InitializeMonocular(Frame& frame);
   bool InitializeStereo(Frame& frame);
-  bool TrackReferenceKeyFrame(Frame& frame);
-  bool TrackWithMotionModel(Frame& frame);
+  // Inliers matched to the reference keyframe by bag of words, from the last frame's pose; 0 when it fails.
+  int TrackReferenceKeyFrame(Frame& frame);
+  // Inliers among the last frame's points matched with the constant-velocity prediction; 0 when it fails.
+  int TrackWithMotionModel(Frame& frame);
+  // The motion model, checked against the reference keyframe when it keeps few of the last frame's points.
+  bool TrackWithMotionModelOrReference(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);
   // Lost for good: starts a new map (stereo initializes it from `frame` at once).
