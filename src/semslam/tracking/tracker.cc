@@ -169,6 +169,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
                               const cv::Mat& right, const cv::Mat& mask) {
   Stopwatch watch;
   new_keyframes_.clear();
+  anchor_keyframe_ = nullptr;
   const bool mono_init = options_.monocular && state_ == TrackingState::kNotInitialized;
   Frame frame(frame_id, timestamp,
               ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
@@ -214,6 +215,9 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     if (ok) ok = TrackLocalMap(frame);
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     if (ok) {
+      if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
+      anchor_keyframe_ = frame.reference_keyframe;
+      camera_from_anchor_ = frame.camera_from_world() * anchor_keyframe_->world_from_camera();
       lost_since_.reset();
       velocity_ = last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr
                       ? std::optional<Rigid3d>(frame.camera_from_world() * last_frame_->world_from_camera())
@@ -259,6 +263,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     record.reference = frame.reference_keyframe;
     record.source = PoseProvenance::kTracked;
     auto lock = map_.ReadLock();
+    FollowMapChange(frame);
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
     result.camera_from_world = frame.camera_from_world();
     result.matched_points = inliers_;
@@ -281,6 +286,11 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   result.milliseconds = watch.ElapsedMs();
   timing_.Add("tracking", result.milliseconds);
   return result;
+}
+
+void Tracker::FollowMapChange(Frame& frame) const {
+  if (map_.big_change_index() == last_big_change_ || anchor_keyframe_ == nullptr) return;
+  frame.SetPose(camera_from_anchor_ * anchor_keyframe_->camera_from_world());
 }
 
 void Tracker::ReplaceMergedPoints(Frame& frame) const {
