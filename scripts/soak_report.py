@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
 """Resident memory against frames from a run's tracking.csv (column rss_mib): a table per 1000 frames, the growth
-per 1000 frames over the second half of the run, and an SVG plot (no plotting library needed)."""
+per 1000 frames over the second half of the run, and an SVG plot (no plotting library needed). With --truth (the
+drive's KITTI poses), each 1000 frames also give their share of new ground: a map that only grows where the drive
+has not been before grows its keyframes, and its memory, with that share."""
 import argparse
 import csv
 import json
+import math
 
 
 def read_rows(path):
@@ -19,6 +22,49 @@ def read_rows(path):
                 "points": int(row["map_points"]) if row.get("map_points") else None,
             })
     return rows
+
+
+def read_kitti_poses(path):
+    """Camera centres and viewing directions (the third column of the rotation) of a KITTI poses file."""
+    centres, directions = [], []
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            v = line.split()
+            if not v:
+                continue
+            if len(v) != 12:
+                raise SystemExit(f"{path}:{number}: expected 12 numbers, found {len(v)}")
+            m = [float(x) for x in v]
+            centres.append((m[3], m[7], m[11]))
+            directions.append((m[2], m[6], m[10]))
+    return centres, directions
+
+
+def new_ground(centres, directions, radius=8.0, min_gap=300, min_cos=0.7):
+    """Per frame: True unless an earlier frame (at least min_gap frames before) stood within `radius` metres,
+    looking the same way (the cosine of the angle between the views at least min_cos)."""
+    cells = {}
+    result = []
+    for i, (c, d) in enumerate(zip(centres, directions)):
+        if i >= min_gap:
+            j = i - min_gap
+            key = (math.floor(centres[j][0] / radius), math.floor(centres[j][2] / radius))
+            cells.setdefault(key, []).append(j)
+        cx, cz = math.floor(c[0] / radius), math.floor(c[2] / radius)
+        seen = False
+        for dx in (-1, 0, 1):
+            for dz in (-1, 0, 1):
+                for j in cells.get((cx + dx, cz + dz), []):
+                    e, f = centres[j], directions[j]
+                    if math.dist(c, e) < radius and sum(a * b for a, b in zip(d, f)) > min_cos:
+                        seen = True
+                        break
+                if seen:
+                    break
+            if seen:
+                break
+        result.append(not seen)
+    return result
 
 
 def slope_per_1000(rows):
@@ -80,18 +126,28 @@ def main():
     parser.add_argument("tracking_csv")
     parser.add_argument("--run-json")
     parser.add_argument("--svg")
+    parser.add_argument("--truth", help="the drive's poses (KITTI format) for the share of new ground")
     args = parser.parse_args()
     rows = read_rows(args.tracking_csv)
     if not rows:
         raise SystemExit(f"{args.tracking_csv}: no rss_mib column or no rows")
-    print("frames          peak RSS MiB   keyframes   map points   (at the end of each 1000 frames)")
+    fresh = new_ground(*read_kitti_poses(args.truth)) if args.truth else None
+    print("frames          peak RSS MiB   keyframes   map points   new keyframes   new ground   "
+          "(at the end of each 1000 frames)")
+    previous_keyframes = 0
     for start in range(0, rows[-1]["frame"] + 1, 1000):
         bucket = [r for r in rows if start <= r["frame"] < start + 1000]
         if not bucket:
             continue
         last = bucket[-1]
-        print(f"{start:5d}-{start + 999:5d}   {max(r['rss'] for r in bucket):12.1f}   {last['keyframes'] or 0:9d}   "
-              f"{last['points'] or 0:10d}")
+        keyframes = last["keyframes"] or 0
+        share = ""
+        if fresh is not None:
+            window = fresh[start:start + 1000]
+            share = f"{100.0 * sum(window) / max(len(window), 1):9.0f} %"
+        print(f"{start:5d}-{start + 999:5d}   {max(r['rss'] for r in bucket):12.1f}   {keyframes:9d}   "
+              f"{last['points'] or 0:10d}   {keyframes - previous_keyframes:13d}   {share}")
+        previous_keyframes = keyframes
     half = rows[len(rows) // 2:]
     print(f"growth over the second half: {slope_per_1000(half):.1f} MiB per 1000 frames; "
           f"over the whole run: {slope_per_1000(rows):.1f}")
