@@ -411,8 +411,9 @@ bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
   std::vector<MapPoint*> predicted_points = frame.map_points;
   const int unpredicted = TrackReferenceKeyFrame(frame);
   if (unpredicted > predicted) {
-    spdlog::info("frame {}: the motion model kept {} of {} points, the reference keyframe {}: its pose is kept",
-                  frame.id(), predicted, last_points, unpredicted);
+    spdlog::info("frame {}: the motion model kept {} of the last frame's {} points; matched to the reference "
+                 "keyframe without prediction: {} inliers, that pose is kept",
+                 frame.id(), predicted, last_points, unpredicted);
     return true;
   }
   frame.SetPose(predicted_pose);
