@@ -2,6 +2,7 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -12,7 +13,21 @@
 #include "semslam/core/error.h"
 #include "semslam/core/interrupt.h"
 
+#if defined(__SANITIZE_THREAD__)
+#define SEMSLAM_THREAD_SANITIZER_BUILD 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define SEMSLAM_THREAD_SANITIZER_BUILD 1
+#endif
+#endif
+
 int main(int argc, char** argv) {
+#ifdef SEMSLAM_THREAD_SANITIZER_BUILD
+  // libtbb is not built with TSan, so TSan cannot see how its workers hand their results back and reports every
+  // parallel loop: under TSan, TBB runs on the calling thread only, and TSan checks the pipeline's own threads
+  // (tracking, mapping, loop closing, segmentation).
+  const tbb::global_control one_tbb_thread(tbb::global_control::max_allowed_parallelism, 1);
+#endif
   namespace cli = semslam::cli;
   cli::SetCommandLine(argc, argv);
   // Logs go to stderr (stdout carries results: eval's JSON, routes), and to run.log in a run folder.
