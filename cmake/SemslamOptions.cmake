@@ -24,6 +24,7 @@ if(SEMSLAM_SANITIZE)
 endif()
 if(SEMSLAM_THREAD_SANITIZER)
   target_compile_options(semslam_options INTERFACE -fsanitize=thread -fno-omit-frame-pointer)
+  target_compile_definitions(semslam_options INTERFACE SEMSLAM_THREAD_SANITIZER_BUILD)
   target_link_options(semslam_options INTERFACE -fsanitize=thread)
 endif()
 # The modules that read user input (and the map loader) carry libFuzzer's coverage instrumentation; the rest

@@ -43,27 +43,21 @@ def read_kitti_poses(path):
 def new_ground(centres, directions, radius=8.0, min_gap=300, min_cos=0.7):
     """Per frame: True unless an earlier frame (at least min_gap frames before) stood within `radius` metres,
     looking the same way (the cosine of the angle between the views at least min_cos)."""
+    def cell(c):
+        return math.floor(c[0] / radius), math.floor(c[2] / radius)
+
+    def same_view(i, j):
+        return (math.dist(centres[i], centres[j]) < radius
+                and sum(a * b for a, b in zip(directions[i], directions[j])) > min_cos)
+
     cells = {}
     result = []
-    for i, (c, d) in enumerate(zip(centres, directions)):
+    for i in range(len(centres)):
         if i >= min_gap:
-            j = i - min_gap
-            key = (math.floor(centres[j][0] / radius), math.floor(centres[j][2] / radius))
-            cells.setdefault(key, []).append(j)
-        cx, cz = math.floor(c[0] / radius), math.floor(c[2] / radius)
-        seen = False
-        for dx in (-1, 0, 1):
-            for dz in (-1, 0, 1):
-                for j in cells.get((cx + dx, cz + dz), []):
-                    e, f = centres[j], directions[j]
-                    if math.dist(c, e) < radius and sum(a * b for a, b in zip(d, f)) > min_cos:
-                        seen = True
-                        break
-                if seen:
-                    break
-            if seen:
-                break
-        result.append(not seen)
+            cells.setdefault(cell(centres[i - min_gap]), []).append(i - min_gap)
+        cx, cz = cell(centres[i])
+        near = (j for dx in (-1, 0, 1) for dz in (-1, 0, 1) for j in cells.get((cx + dx, cz + dz), []))
+        result.append(not any(same_view(i, j) for j in near))
     return result
 
 

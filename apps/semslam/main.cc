@@ -13,14 +13,6 @@
 #include "semslam/core/error.h"
 #include "semslam/core/interrupt.h"
 
-#if defined(__SANITIZE_THREAD__)
-#define SEMSLAM_THREAD_SANITIZER_BUILD 1
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-#define SEMSLAM_THREAD_SANITIZER_BUILD 1
-#endif
-#endif
-
 int main(int argc, char** argv) {
 #ifdef SEMSLAM_THREAD_SANITIZER_BUILD
   // libtbb is not built with TSan, so TSan cannot see how its workers hand their results back and reports every

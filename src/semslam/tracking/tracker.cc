@@ -169,7 +169,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
                               const cv::Mat& right, const cv::Mat& mask) {
   Stopwatch watch;
   new_keyframes_.clear();
-  anchor_keyframe_ = nullptr;
+  tracked_camera_from_reference_.reset();
   const bool mono_init = options_.monocular && state_ == TrackingState::kNotInitialized;
   Frame frame(frame_id, timestamp,
               ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
@@ -216,8 +216,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     if (ok) {
       if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
-      anchor_keyframe_ = frame.reference_keyframe;
-      camera_from_anchor_ = frame.camera_from_world() * anchor_keyframe_->world_from_camera();
+      tracked_camera_from_reference_ = frame.camera_from_world() * frame.reference_keyframe->world_from_camera();
       lost_since_.reset();
       velocity_ = last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr
                       ? std::optional<Rigid3d>(frame.camera_from_world() * last_frame_->world_from_camera())
@@ -289,8 +288,8 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
 }
 
 void Tracker::FollowMapChange(Frame& frame) const {
-  if (map_.big_change_index() == last_big_change_ || anchor_keyframe_ == nullptr) return;
-  frame.SetPose(camera_from_anchor_ * anchor_keyframe_->camera_from_world());
+  if (map_.big_change_index() == last_big_change_ || !tracked_camera_from_reference_) return;
+  frame.SetPose(*tracked_camera_from_reference_ * frame.reference_keyframe->camera_from_world());
 }
 
 void Tracker::ReplaceMergedPoints(Frame& frame) const {
@@ -404,8 +403,7 @@ int Tracker::TrackWithMotionModel(Frame& frame) {
 bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
   const int predicted = TrackWithMotionModel(frame);
   if (predicted == 0) return TrackReferenceKeyFrame(frame) > 0;
-  const auto last_points = static_cast<double>(std::count_if(
-      last_frame_->map_points.begin(), last_frame_->map_points.end(), [](const MapPoint* p) { return p != nullptr; }));
+  const int last_points = last_frame_->CountMatches();
   if (predicted >= options_.motion_model_min_kept_ratio * last_points) return true;
   const Rigid3d predicted_pose = frame.camera_from_world();
   std::vector<MapPoint*> predicted_points = frame.map_points;
@@ -416,9 +414,10 @@ bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
                  frame.id(), predicted, last_points, unpredicted);
     return true;
   }
+  // Both searches leave no outlier flags (DiscardOutliers clears them), so the motion model's matches go back as
+  // they were.
   frame.SetPose(predicted_pose);
   frame.map_points = std::move(predicted_points);
-  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   return true;
 }
 

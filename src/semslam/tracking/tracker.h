@@ -160,7 +160,7 @@ class Tracker {
   // The record of a frame without a tracked pose: the motion model's prediction, when there is one.
   void PredictPose(FrameRecord& record) const;
   // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking lock
-  // was released: the frame follows the keyframe it is anchored to. Call under a map lock.
+  // was released: the frame follows its reference keyframe. Call under a map lock.
   void FollowMapChange(Frame& frame) const;
   // Back to "not initialized" in the active map: no last frame, motion, keyframes or local map. The last
   // tracked pose stays (lost frames are still predicted from it) unless Reset() drops it too.
@@ -196,10 +196,9 @@ class Tracker {
   std::unique_ptr<Frame> last_frame_;
   std::optional<Rigid3d> velocity_;  // current_from_last of the previous step
   int last_big_change_ = 0;
-  // The current frame's pose relative to a keyframe, taken under the lock it was tracked (or made a keyframe)
-  // under: what the frame keeps when the map moves before its pose is recorded. Reset by each Track().
-  KeyFrame* anchor_keyframe_ = nullptr;
-  Rigid3d camera_from_anchor_;
+  // The current frame's pose relative to its reference keyframe, taken under the lock it was tracked (or made a
+  // keyframe) under: what the frame keeps when the map moves before its pose is recorded. Reset by each Track().
+  std::optional<Rigid3d> tracked_camera_from_reference_;
   std::uint64_t last_relocalization_frame_ = 0;
   KeyFrame* last_keyframe_ = nullptr;
   KeyFrame* reference_keyframe_ = nullptr;

@@ -57,14 +57,13 @@ void Tracker::CreateNewKeyFrame(Frame& frame) {
   if (!mapper_->SetNotStop(true)) return;
   auto lock = map_.WriteLock();
   // A merge or loop correction between tracking and now would otherwise put the keyframe where the frame was
-  // before the map moved (20 m off after a mono merge on KITTI 07).
+  // before the map moved.
   FollowMapChange(frame);
   KeyFrame* kf = map_.AddKeyFrame(frame);
   new_keyframes_.push_back({kf->id(), frame.id()});
   reference_keyframe_ = kf;
   frame.reference_keyframe = kf;
-  anchor_keyframe_ = kf;
-  camera_from_anchor_ = Rigid3d();
+  tracked_camera_from_reference_ = Rigid3d();
   if (!options_.monocular) {
     // Close stereo points the map does not have yet become map points now, so the next frames track them.
     std::vector<std::pair<float, int>> by_depth;
