@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Resident memory against frames from a run's tracking.csv (column rss_mib): a table per 1000 frames, the growth
+"""Resident memory against frames from a run's tracking.csv (column rss_mib): a table per 1000 frames (--rows), the growth
 per 1000 frames over the second half of the run, and an SVG plot (no plotting library needed). With --truth (the
 drive's KITTI poses), each 1000 frames also give their share of new ground: a map that only grows where the drive
 has not been before grows its keyframes, and its memory, with that share."""
@@ -121,25 +121,28 @@ def main():
     parser.add_argument("--run-json")
     parser.add_argument("--svg")
     parser.add_argument("--truth", help="the drive's poses (KITTI format) for the share of new ground")
+    parser.add_argument("--rows", type=int, default=1000, help="frames per table row (default 1000)")
     args = parser.parse_args()
     rows = read_rows(args.tracking_csv)
     if not rows:
         raise SystemExit(f"{args.tracking_csv}: no rss_mib column or no rows")
+    if args.rows < 1:
+        raise SystemExit("--rows must be at least 1")
     fresh = new_ground(*read_kitti_poses(args.truth)) if args.truth else None
     print("frames          peak RSS MiB   keyframes   map points   new keyframes   new ground   "
-          "(at the end of each 1000 frames)")
+          f"(at the end of each {args.rows} frames)")
     previous_keyframes = 0
-    for start in range(0, rows[-1]["frame"] + 1, 1000):
-        bucket = [r for r in rows if start <= r["frame"] < start + 1000]
+    for start in range(0, rows[-1]["frame"] + 1, args.rows):
+        bucket = [r for r in rows if start <= r["frame"] < start + args.rows]
         if not bucket:
             continue
         last = bucket[-1]
         keyframes = last["keyframes"] or 0
         share = ""
         if fresh is not None:
-            window = fresh[start:start + 1000]
+            window = fresh[start:start + args.rows]
             share = f"{100.0 * sum(window) / max(len(window), 1):9.0f} %"
-        print(f"{start:5d}-{start + 999:5d}   {max(r['rss'] for r in bucket):12.1f}   {keyframes:9d}   "
+        print(f"{start:5d}-{start + args.rows - 1:5d}   {max(r['rss'] for r in bucket):12.1f}   {keyframes:9d}   "
               f"{last['points'] or 0:10d}   {keyframes - previous_keyframes:13d}   {share}")
         previous_keyframes = keyframes
     half = rows[len(rows) // 2:]
@@ -150,7 +153,7 @@ def main():
         print(f"run.json: peak_rss_mib {run.get('peak_rss_mib')}, keyframes {run.get('keyframes')}, "
               f"points {run.get('points')}, loops {run.get('loops')}, tracked {run.get('tracked')}/{run.get('frames')}")
     if args.svg:
-        svg_plot(rows, args.svg, f"semslam run over {rows[-1]['frame'] + 1} synthetic frames: memory and keyframes")
+        svg_plot(rows, args.svg, f"semslam run over {rows[-1]['frame'] + 1} frames: memory and keyframes")
         print(f"plot: {args.svg}")
 
 
