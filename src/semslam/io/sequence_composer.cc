@@ -89,8 +89,10 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
   Require(!frames.empty(), "compose: no frames");
   for (const ComposedFrame& f : frames) {
     if (f.source_frame >= source.size()) {
-      throw InputError(source.directory(), fmt::format("compose: the sequence has no frame {} (it has {})",
-                                                       f.source_frame, source.size()));
+      const std::string range =
+          source.size() == 0 ? "it has none" : fmt::format("its frames are 0 to {}", source.size() - 1);
+      throw InputError(source.directory(),
+                       fmt::format("compose: the sequence has no frame {} ({})", f.source_frame, range));
     }
   }
   std::error_code ec;
