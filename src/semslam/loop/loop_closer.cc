@@ -316,7 +316,12 @@ bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const Key
   const Eigen::Vector3d corrected_center = current_from_world_.Inverse() * Eigen::Vector3d::Zero();
   const double jump = (corrected_center - current->center()).norm();
   const double limit = options_.max_stereo_correction_ratio * odometry + options_.stereo_correction_slack_m;
-  if (jump <= limit) return true;
+  if (jump <= limit) {
+    spdlog::info("loop candidate: keyframe {} with keyframe {} moves the keyframe {:.1f} m after {:.1f} m of "
+                 "odometry between them (limit {:.1f} m)",
+                 current->id(), candidate->id(), jump, odometry, limit);
+    return true;
+  }
   spdlog::info("loop candidate: keyframe {} with keyframe {} refused: it would move the keyframe {:.1f} m after "
                "{:.1f} m of odometry between them (limit {:.1f} m); a place that only looks the same",
                current->id(), candidate->id(), jump, odometry, limit);
