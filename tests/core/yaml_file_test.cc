@@ -32,6 +32,17 @@ TEST(YamlFile, RefusesRepeatedKeysNamingTheLine) {
   EXPECT_NE(in_list.find("config.yaml:2"), std::string::npos) << in_list;
 }
 
+// Found by the slam_config fuzz target: "? key: 0.7" (a key that is itself a map) threw yaml-cpp's
+// TypedBadConversion out of the configuration reader, which names no file and ends the program.
+TEST(YamlFile, RefusesKeysThatAreNotPlainNames) {
+  for (const std::string yaml : {"tracking:\n  ? keyframe_tracked_ratio_stereo: 0.7\n  : 1\n",
+                                 "? [a, b]\n: 1\n", "? {a: 1}\n: 2\n", "a: 1\n? \n: 2\n"}) {
+    const std::string error = ErrorOf(yaml);
+    EXPECT_NE(error.find("config.yaml:"), std::string::npos) << yaml << " -> " << error;
+    EXPECT_NE(error.find("plain name"), std::string::npos) << yaml << " -> " << error;
+  }
+}
+
 TEST(YamlFile, AcceptsDistinctKeys) {
   const YAML::Node node = LoadYamlText("a: 1\nb: {a: 2}\nc: [ {a: 3}, {a: 4} ]\n", "x.yaml");
   EXPECT_EQ(node["b"]["a"].as<int>(), 2);

@@ -18,14 +18,17 @@ void CheckUniqueKeys(const YAML::Node& node, const std::filesystem::path& source
   if (node.IsMap()) {
     std::map<std::string, int> first_line;
     for (const auto& entry : node) {
-      if (entry.first.IsScalar()) {
-        const std::string key = entry.first.Scalar();
-        const int line = entry.first.Mark().line + 1;
-        const auto [it, inserted] = first_line.emplace(key, line);
-        if (!inserted) {
-          throw InputError(YamlLocation(source, entry.first.Mark()), key,
-                           fmt::format("the key is repeated (first on line {}); give it once", it->second));
-        }
+      // Our files name their keys; a list, a map or nothing as a key ("? [a, b]: 1") is a typo or garbage.
+      if (!entry.first.IsScalar()) {
+        throw InputError(YamlLocation(source, entry.first.Mark()),
+                         "a key must be a plain name, not a list, a map or empty");
+      }
+      const std::string key = entry.first.Scalar();
+      const int line = entry.first.Mark().line + 1;
+      const auto [it, inserted] = first_line.emplace(key, line);
+      if (!inserted) {
+        throw InputError(YamlLocation(source, entry.first.Mark()), key,
+                         fmt::format("the key is repeated (first on line {}); give it once", it->second));
       }
       CheckUniqueKeys(entry.second, source, depth + 1);
     }

@@ -16,7 +16,7 @@ namespace semslam {
 SourceLocation YamlLocation(const std::filesystem::path& file, const YAML::Mark& mark);
 
 // Parses `file`. Throws InputError naming the file (and the line) when it cannot be read, is not YAML, holds
-// text that is not UTF-8, or repeats a key in a mapping.
+// text that is not UTF-8, repeats a key in a mapping, or has a key that is not a plain name.
 YAML::Node LoadYamlFile(const std::filesystem::path& file);
 // The same for text read elsewhere; `source` names it in errors.
 YAML::Node LoadYamlText(const std::string& text, const std::filesystem::path& source);
