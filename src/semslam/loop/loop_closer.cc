@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <unordered_map>
 
 #include "semslam/core/error.h"
@@ -32,6 +33,23 @@ void LoopCloserOptions::Check() const {
           "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
   Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,
           "loop closer: max_stereo_correction_ratio must be positive and stereo_correction_slack_m >= 0");
+  Require(stereo_rotation_slack_deg >= 0 && max_stereo_rotation_deg_per_100m >= 0 &&
+              max_mono_loop_rotation_deg > 0 && max_mono_loop_rotation_deg <= 180,
+          "loop closer: stereo_rotation_slack_deg and max_stereo_rotation_deg_per_100m must be >= 0, "
+          "max_mono_loop_rotation_deg in (0, 180]");
+}
+
+double CorrectionRotationDeg(const Rigid3d& before, const Sim3d& after) {
+  return after.rotation.angularDistance(before.rotation) * 180.0 / std::numbers::pi;
+}
+
+double LoopCloserOptions::MaxStereoCorrectionM(double odometry_m) const {
+  return max_stereo_correction_ratio * odometry_m + stereo_correction_slack_m;
+}
+
+double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
+  if (!fix_scale) return max_mono_loop_rotation_deg;
+  return stereo_rotation_slack_deg + max_stereo_rotation_deg_per_100m * odometry_m / 100.0;
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -307,7 +325,16 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
 }
 
 bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const {
-  if (!options_.fix_scale || candidate->map_id() != current->map_id()) return true;
+  if (candidate->map_id() != current->map_id()) return true;  // maps to merge share no odometry
+  const double turn = CorrectionRotationDeg(current->camera_from_world(), current_from_world_);
+  if (!options_.fix_scale) {
+    const double turn_limit = options_.MaxRotationDeg(0.0);
+    const bool agrees = turn <= turn_limit;
+    spdlog::info("loop candidate: keyframe {} with keyframe {} {} the keyframe {:.1f} deg (limit {:.1f} deg){}",
+                 current->id(), candidate->id(), agrees ? "turns" : "refused: it would turn", turn, turn_limit,
+                 agrees ? "" : "; a place that only looks the same");
+    return agrees;
+  }
   // The odometry between the two ends (metres in a stereo map): the shortest chain of the links the essential
   // graph holds, so a revisit tracked in the map, an earlier loop or a merge shortens it. Counting the path
   // driven instead let a look-alike 24 m away pass at the third visit of a place (900 m driven, 30 m allowed).
@@ -315,17 +342,14 @@ bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const Key
   const double odometry = KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility);
   const Eigen::Vector3d corrected_center = current_from_world_.Inverse() * Eigen::Vector3d::Zero();
   const double jump = (corrected_center - current->center()).norm();
-  const double limit = options_.max_stereo_correction_ratio * odometry + options_.stereo_correction_slack_m;
-  if (jump <= limit) {
-    spdlog::info("loop candidate: keyframe {} with keyframe {} moves the keyframe {:.1f} m after {:.1f} m of "
-                 "odometry between them (limit {:.1f} m)",
-                 current->id(), candidate->id(), jump, odometry, limit);
-    return true;
-  }
-  spdlog::info("loop candidate: keyframe {} with keyframe {} refused: it would move the keyframe {:.1f} m after "
-               "{:.1f} m of odometry between them (limit {:.1f} m); a place that only looks the same",
-               current->id(), candidate->id(), jump, odometry, limit);
-  return false;
+  const double limit = options_.MaxStereoCorrectionM(odometry);
+  const double turn_limit = options_.MaxRotationDeg(odometry);
+  const bool agrees = jump <= limit && turn <= turn_limit;
+  spdlog::info("loop candidate: keyframe {} with keyframe {} {} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m "
+               "of odometry between them (limits {:.1f} m, {:.1f} deg){}",
+               current->id(), candidate->id(), agrees ? "moves" : "refused: it would move", jump, turn, odometry,
+               limit, turn_limit, agrees ? "" : "; a place that only looks the same");
+  return agrees;
 }
 
 int LoopCloser::CountVerifiedNeighbours(const KeyFrame* current) const {

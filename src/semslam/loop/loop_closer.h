@@ -22,6 +22,9 @@
 
 namespace semslam {
 
+// How far a correction to camera_from_world `after` turns a keyframe now at `before`, in degrees.
+double CorrectionRotationDeg(const Rigid3d& before, const Sim3d& after);
+
 class Vocabulary;
 class KeyFrameDatabase;
 class LocalMapper;
@@ -48,12 +51,23 @@ struct LoopCloserOptions {
   // drifts too much for such a bound, and maps to merge share no odometry.
   double max_stereo_correction_ratio = 0.03;
   double stereo_correction_slack_m = 3.0;
+  // A loop within one map may turn the current keyframe by at most this much. Odometry's heading drifts by
+  // a few degrees where its length may drift by percents (monocular scale); a look-alike seen across a
+  // crossing is off by the angle between the streets (a stereo loop at a crossing, 11 m and 80 degrees from
+  // the true keyframe, passed the length bound). Stereo: the slack plus a rate per 100 m of odometry, ten
+  // times what stereo odometry drifts on KITTI; monocular, whose odometry has no metric length: a fixed bound.
+  double stereo_rotation_slack_deg = 5.0;
+  double max_stereo_rotation_deg_per_100m = 2.0;
+  double max_mono_loop_rotation_deg = 30.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
   int global_ba_iterations = 10;
   bool enabled = true;
 
   void Check() const;
+  // The bounds above for a loop whose two ends are odometry_m apart along the map's links (stereo only).
+  double MaxStereoCorrectionM(double odometry_m) const;
+  double MaxRotationDeg(double odometry_m) const;
 };
 
 struct LoopEvent {
@@ -65,6 +79,7 @@ struct LoopEvent {
   int verified_neighbours = 0;  // covisible keyframes that confirmed the place
   double scale = 1.0;           // of the correction (monocular drift) or of the merged map
   double correction_m = 0.0;    // how far the query keyframe moved
+  double correction_deg = 0.0;  // and how far it turned
   bool merge = false;           // a merge of two maps rather than a loop in one
   std::uint32_t map_id = 0;     // the query keyframe's map (the one merged away, for a merge)
   std::uint32_t matched_map_id = 0;

@@ -79,6 +79,7 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
     connected.push_back(current);
     const Rigid3d world_from_current = current->world_from_camera();
     event.correction_m = (ToRigid(current_from_world_).Inverse().translation - current->center()).norm();
+    event.correction_deg = CorrectionRotationDeg(current->camera_from_world(), current_from_world_);
 
     // Propagate the correction to the keyframes around the current one through their relative poses.
     corrected[current] = current_from_world_;

@@ -385,6 +385,7 @@ RunSummary RunSequence(const RunOptions& options) {
   for (const LoopEvent& e : slam.Loops()) {
     nlohmann::json event = LoopEventJson(e);
     event["correction_m"] = e.correction_m;
+    event["correction_deg"] = e.correction_deg;
     loops.push_back(std::move(event));
   }
   run["loop_events"] = loops;
