@@ -1,7 +1,8 @@
 #pragma once
 // The loop-closing thread: detects when the camera returns to a mapped place (bag-of-words candidates with
 // covisibility consistency over consecutive keyframes), computes the Sim(3) (monocular) or SE(3) (stereo)
-// between the two ends, verifies it in the current keyframe's neighbours, fuses the duplicated points,
+// between the two ends, verifies it in the current keyframe's neighbours and against the odometry between
+// the two ends (how far it moves and turns the keyframe), fuses the duplicated points,
 // corrects the essential graph, and refines the whole map with a global bundle adjustment in the
 // background. A place of another map of the atlas (see map/map.h) merges the two maps: the active one is
 // moved into the other's frame by the same transform, then corrected as a loop.
@@ -53,9 +54,10 @@ struct LoopCloserOptions {
   double stereo_correction_slack_m = 3.0;
   // A loop within one map may turn the current keyframe by at most this much. Odometry's heading drifts by
   // a few degrees where its length may drift by percents (monocular scale); a look-alike seen across a
-  // crossing is off by the angle between the streets (a stereo loop at a crossing, 11 m and 80 degrees from
-  // the true keyframe, passed the length bound). Stereo: the slack plus a rate per 100 m of odometry, ten
-  // times what stereo odometry drifts on KITTI; monocular, whose odometry has no metric length: a fixed bound.
+  // crossing is off by the angle between the streets (a stereo loop at a corner that would have moved the
+  // keyframe 12 m and turned it 90 degrees passed the length bound). Stereo: the slack plus a rate per 100 m of
+  // odometry, ten times what stereo odometry drifts on KITTI; monocular, whose odometry has no metric length:
+  // a fixed bound.
   double stereo_rotation_slack_deg = 5.0;
   double max_stereo_rotation_deg_per_100m = 2.0;
   double max_mono_loop_rotation_deg = 30.0;
@@ -65,7 +67,8 @@ struct LoopCloserOptions {
   bool enabled = true;
 
   void Check() const;
-  // The bounds above for a loop whose two ends are odometry_m apart along the map's links (stereo only).
+  // The bounds above for a loop whose two ends are odometry_m apart along the map's links (metres; the
+  // monocular rotation bound does not use it).
   double MaxStereoCorrectionM(double odometry_m) const;
   double MaxRotationDeg(double odometry_m) const;
 };
