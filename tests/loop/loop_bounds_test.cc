@@ -13,33 +13,45 @@ Eigen::Quaterniond Yaw(double degrees) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(degrees * M_PI / 180.0, Eigen::Vector3d::UnitY()));
 }
 
-TEST(CorrectionRotation, IsTheAngleBetweenTheTwoOrientationsWhateverTheScale) {
+TEST(MeasureCorrection, GivesTheMoveOfTheCameraCentreAndTheTurnWhateverTheScale) {
   const Rigid3d before(Yaw(10.0), Eigen::Vector3d(1, 2, 3));
-  EXPECT_NEAR(CorrectionRotationDeg(before, Sim3d(0.5, Yaw(90.5), Eigen::Vector3d(7, 0, 0))), 80.5, 1e-9);
-  EXPECT_NEAR(CorrectionRotationDeg(before, Sim3d(2.0, Yaw(-5.0), Eigen::Vector3d::Zero())), 15.0, 1e-9);
-  EXPECT_NEAR(CorrectionRotationDeg(before, Sim3d(before)), 0.0, 1e-6);
+  const Eigen::Vector3d centre = before.Inverse().translation;
+  // A Sim(3) camera_from_world whose camera stands 4 m along x from the keyframe, turned 80.5 degrees.
+  const Rigid3d moved = Rigid3d(Yaw(90.5), Eigen::Vector3d::Zero()) *
+                        Rigid3d(Eigen::Quaterniond::Identity(), -(centre + Eigen::Vector3d(4, 0, 0)));
+  const double scale = 0.5;
+  const LoopCorrectionSize size = MeasureCorrection(before, Sim3d(scale, moved.rotation, scale * moved.translation));
+  EXPECT_NEAR(size.metres, 4.0, 1e-9);
+  EXPECT_NEAR(size.degrees, 80.5, 1e-9);
+  const LoopCorrectionSize none = MeasureCorrection(before, Sim3d(before));
+  EXPECT_NEAR(none.metres, 0.0, 1e-9);
+  EXPECT_NEAR(none.degrees, 0.0, 1e-6);
 }
 
-// The black-out drive's failing stereo loop: after 366.6 m of odometry the query keyframe matched one 11.25 m and
-// 80.5 degrees away across a crossing. Its 12.4 m jump was inside the length bound; its turn is far outside the
-// rotation bound, while the true loops of that drive (0.2-0.4 m, a degree) stay inside both.
-TEST(LoopBounds, StereoRefusesTheLookAlikeAcrossACrossing) {
+// The black-out drive (synthetic stereo, 2 s black): after 366.6 m of graph odometry the query keyframe matched a
+// corner seen from the other street. The correction would have moved it 12.3 m, inside the 14.0 m length bound,
+// and turned it 90 degrees; the true loops of the drive moved it 0.3-0.5 m and turned it under a degree. Look-alike
+// blocks elsewhere (133 m away, turned 0.1 degrees) are the length bound's.
+TEST(LoopBounds, StereoRefusesTheCornerAliasByItsTurnAndKeepsTheTrueLoop) {
   LoopCloserOptions options;
   options.fix_scale = true;
   EXPECT_NEAR(options.MaxStereoCorrectionM(366.6), 14.0, 0.01);
-  EXPECT_GT(options.MaxStereoCorrectionM(366.6), 12.4) << "the length bound alone let the look-alike pass";
   EXPECT_NEAR(options.MaxRotationDeg(366.6), 12.33, 0.01);
-  EXPECT_LT(options.MaxRotationDeg(366.6), 80.5);
-  EXPECT_GT(options.MaxRotationDeg(0.0), 1.0) << "a short loop may still turn a keyframe by its own noise";
-  EXPECT_GT(options.MaxRotationDeg(2000.0), options.MaxRotationDeg(100.0)) << "heading drift grows with the path";
+  EXPECT_FALSE(options.AllowsCorrection({12.3, 90.0}, 366.6));
+  EXPECT_TRUE(options.AllowsCorrection({0.3, 0.2}, 361.4));
+  EXPECT_FALSE(options.AllowsCorrection({133.1, 0.1}, 321.4));
+  EXPECT_TRUE(options.AllowsCorrection({2.0, 4.9}, 0.0)) << "a short loop may still turn a keyframe by its noise";
+  EXPECT_FALSE(options.AllowsCorrection({2.0, 5.1}, 0.0));
+  EXPECT_TRUE(options.AllowsCorrection({2.0, 40.0}, 2000.0)) << "heading drift grows with the path";
 }
 
-TEST(LoopBounds, MonocularRotationBoundIgnoresTheUnscaledOdometry) {
+TEST(LoopBounds, MonocularBoundsOnlyTheTurnWhateverTheOdometry) {
   LoopCloserOptions options;
   options.fix_scale = false;
-  EXPECT_DOUBLE_EQ(options.MaxRotationDeg(0.0), options.max_mono_loop_rotation_deg);
   EXPECT_DOUBLE_EQ(options.MaxRotationDeg(1e6), options.max_mono_loop_rotation_deg);
-  EXPECT_LT(options.MaxRotationDeg(1e6), 80.5);
+  EXPECT_TRUE(options.AllowsCorrection({500.0, 1.0}, 0.0)) << "a monocular map's length is not metric";
+  EXPECT_TRUE(options.AllowsCorrection({0.5, 29.0}, 0.0));
+  EXPECT_FALSE(options.AllowsCorrection({0.5, 90.0}, 1e6));
 }
 
 TEST(LoopBounds, CheckRefusesBoundsThatMeanNothing) {

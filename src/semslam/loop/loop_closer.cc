@@ -1,11 +1,13 @@
 #include "semslam/loop/loop_closer.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <unordered_map>
 
 #include "semslam/core/error.h"
@@ -39,8 +41,14 @@ void LoopCloserOptions::Check() const {
           "max_mono_loop_rotation_deg in (0, 180]");
 }
 
-double CorrectionRotationDeg(const Rigid3d& before, const Sim3d& after) {
-  return after.rotation.angularDistance(before.rotation) * 180.0 / std::numbers::pi;
+Rigid3d RigidPose(const Sim3d& camera_from_world) {
+  return Rigid3d(camera_from_world.rotation, camera_from_world.translation / camera_from_world.scale);
+}
+
+LoopCorrectionSize MeasureCorrection(const Rigid3d& before, const Sim3d& after) {
+  const Rigid3d corrected = RigidPose(after);
+  return {(corrected.Inverse().translation - before.Inverse().translation).norm(),
+          (corrected * before.Inverse()).RotationAngle() * 180.0 / std::numbers::pi};
 }
 
 double LoopCloserOptions::MaxStereoCorrectionM(double odometry_m) const {
@@ -50,6 +58,11 @@ double LoopCloserOptions::MaxStereoCorrectionM(double odometry_m) const {
 double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
   if (!fix_scale) return max_mono_loop_rotation_deg;
   return stereo_rotation_slack_deg + max_stereo_rotation_deg_per_100m * odometry_m / 100.0;
+}
+
+bool LoopCloserOptions::AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m) const {
+  if (correction.degrees > MaxRotationDeg(odometry_m)) return false;
+  return !fix_scale || correction.metres <= MaxStereoCorrectionM(odometry_m);
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -326,29 +339,25 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
 
 bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const {
   if (candidate->map_id() != current->map_id()) return true;  // maps to merge share no odometry
-  const double turn = CorrectionRotationDeg(current->camera_from_world(), current_from_world_);
-  if (!options_.fix_scale) {
-    const double turn_limit = options_.MaxRotationDeg(0.0);
-    const bool agrees = turn <= turn_limit;
-    spdlog::info("loop candidate: keyframe {} with keyframe {} {} the keyframe {:.1f} deg (limit {:.1f} deg){}",
-                 current->id(), candidate->id(), agrees ? "turns" : "refused: it would turn", turn, turn_limit,
-                 agrees ? "" : "; a place that only looks the same");
-    return agrees;
-  }
+  const LoopCorrectionSize correction = MeasureCorrection(current->camera_from_world(), current_from_world_);
   // The odometry between the two ends (metres in a stereo map): the shortest chain of the links the essential
   // graph holds, so a revisit tracked in the map, an earlier loop or a merge shortens it. Counting the path
   // driven instead let a look-alike 24 m away pass at the third visit of a place (900 m driven, 30 m allowed).
+  // A monocular map's bound does not use it.
   constexpr int kEssentialCovisibility = 100;  // as in OptimizeEssentialGraph
-  const double odometry = KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility);
-  const Eigen::Vector3d corrected_center = current_from_world_.Inverse() * Eigen::Vector3d::Zero();
-  const double jump = (corrected_center - current->center()).norm();
-  const double limit = options_.MaxStereoCorrectionM(odometry);
-  const double turn_limit = options_.MaxRotationDeg(odometry);
-  const bool agrees = jump <= limit && turn <= turn_limit;
-  spdlog::info("loop candidate: keyframe {} with keyframe {} {} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m "
-               "of odometry between them (limits {:.1f} m, {:.1f} deg){}",
-               current->id(), candidate->id(), agrees ? "moves" : "refused: it would move", jump, turn, odometry,
-               limit, turn_limit, agrees ? "" : "; a place that only looks the same");
+  const double odometry =
+      options_.fix_scale ? KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility) : 0.0;
+  const bool agrees = options_.AllowsCorrection(correction, odometry);
+  const std::string what =
+      options_.fix_scale
+          ? fmt::format("{} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m of odometry between them (limits "
+                        "{:.1f} m, {:.1f} deg)",
+                        agrees ? "moves" : "refused: it would move", correction.metres, correction.degrees,
+                        odometry, options_.MaxStereoCorrectionM(odometry), options_.MaxRotationDeg(odometry))
+          : fmt::format("{} the keyframe {:.1f} deg (limit {:.1f} deg)", agrees ? "turns" : "refused: it would turn",
+                        correction.degrees, options_.MaxRotationDeg(odometry));
+  spdlog::info("loop candidate: keyframe {} with keyframe {} {}{}", current->id(), candidate->id(), what,
+               agrees ? "" : "; a place that only looks the same");
   return agrees;
 }
 

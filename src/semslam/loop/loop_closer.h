@@ -23,8 +23,16 @@
 
 namespace semslam {
 
-// How far a correction to camera_from_world `after` turns a keyframe now at `before`, in degrees.
-double CorrectionRotationDeg(const Rigid3d& before, const Sim3d& after);
+// The rigid camera_from_world a corrected Sim(3) one stands for: the same camera, its map's scale divided out.
+Rigid3d RigidPose(const Sim3d& camera_from_world);
+
+// How far a loop's correction moves and turns a keyframe: from its pose `before` to the corrected
+// camera_from_world `after` (whose scale, for a monocular map, is the map's, not the keyframe's).
+struct LoopCorrectionSize {
+  double metres = 0.0;
+  double degrees = 0.0;
+};
+LoopCorrectionSize MeasureCorrection(const Rigid3d& before, const Sim3d& after);
 
 class Vocabulary;
 class KeyFrameDatabase;
@@ -56,8 +64,8 @@ struct LoopCloserOptions {
   // a few degrees where its length may drift by percents (monocular scale); a look-alike seen across a
   // crossing is off by the angle between the streets (a stereo loop at a corner that would have moved the
   // keyframe 12 m and turned it 90 degrees passed the length bound). Stereo: the slack plus a rate per 100 m of
-  // odometry, ten times what stereo odometry drifts on KITTI; monocular, whose odometry has no metric length:
-  // a fixed bound.
+  // odometry, far above the under 1 degree that the true loops measured so far turned their keyframe;
+  // monocular, whose odometry has no metric length: a fixed bound.
   double stereo_rotation_slack_deg = 5.0;
   double max_stereo_rotation_deg_per_100m = 2.0;
   double max_mono_loop_rotation_deg = 30.0;
@@ -71,6 +79,9 @@ struct LoopCloserOptions {
   // monocular rotation bound does not use it).
   double MaxStereoCorrectionM(double odometry_m) const;
   double MaxRotationDeg(double odometry_m) const;
+  // Whether a loop within one map of that odometry may make this correction: stereo within both bounds,
+  // monocular within the rotation bound (its odometry's length is not metric).
+  bool AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m) const;
 };
 
 struct LoopEvent {

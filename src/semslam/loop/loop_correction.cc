@@ -18,12 +18,6 @@
 #include "semslam/optim/sim3_optimization.h"
 
 namespace semslam {
-namespace {
-
-// The rigid pose of a similarity camera_from_world: rotation kept, translation divided by the scale.
-Rigid3d ToRigid(const Sim3d& s) { return Rigid3d(s.rotation, s.translation / s.scale); }
-
-}  // namespace
 
 double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
   // current_from_world_ is the current keyframe's pose in the matched map's frame: the same transform takes
@@ -36,7 +30,7 @@ double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
     p->UpdateNormalAndDepth();
   }
   for (KeyFrame* kf : map_.KeyFramesOfMap(from)) {
-    kf->SetPose(ToRigid(Sim3d(kf->camera_from_world()) * current_map_from_into));
+    kf->SetPose(RigidPose(Sim3d(kf->camera_from_world()) * current_map_from_into));
   }
   map_.MergeMapInto(from, into);
   spdlog::info("map {} moved into the frame of map {} (scale {:.3f}) and merged", from, into,
@@ -78,8 +72,9 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
     std::vector<KeyFrame*> connected = current->Covisibles();
     connected.push_back(current);
     const Rigid3d world_from_current = current->world_from_camera();
-    event.correction_m = (ToRigid(current_from_world_).Inverse().translation - current->center()).norm();
-    event.correction_deg = CorrectionRotationDeg(current->camera_from_world(), current_from_world_);
+    const LoopCorrectionSize correction = MeasureCorrection(current->camera_from_world(), current_from_world_);
+    event.correction_m = correction.metres;
+    event.correction_deg = correction.degrees;
 
     // Propagate the correction to the keyframes around the current one through their relative poses.
     corrected[current] = current_from_world_;
@@ -102,7 +97,7 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
         p->corrected_reference = kf->id();
         p->UpdateNormalAndDepth();
       }
-      kf->SetPose(ToRigid(corrected_pose));
+      kf->SetPose(RigidPose(corrected_pose));
       kf->UpdateConnections();
     }
     // Fuse the loop: matched points replace the current keyframe's duplicates.
@@ -219,7 +214,7 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     const Sim3d world_from_kf = graph.world_from_node(index);
     const Sim3d camera_from_world = world_from_kf.Inverse();
     change[kf->id()] = {before[kf], world_from_kf};
-    const_cast<KeyFrame*>(kf)->SetPose(ToRigid(camera_from_world));
+    const_cast<KeyFrame*>(kf)->SetPose(RigidPose(camera_from_world));
   }
   for (MapPoint* p : map_.MapPointsOfMap(current->map_id())) {
     if (p->is_bad()) continue;
