@@ -120,6 +120,43 @@ TEST(BundleAdjust, NoiseFreeMonocularRecoversPosesAndPoints) {
   }
 }
 
+TEST(BundleAdjust, SelfCalibrationFindsTheCameraThatMadeTheImages) {
+  // The images come from KittiCamera; the problem is given a calibration 2 % off in focal length with the
+  // principal point 4 px off. Plain BA bends the poses to fit; self-calibration recovers the camera.
+  Scene truth = MakeScene(12, 400, 2, false, 0.0, 0.0, 7);
+  const PinholeCamera camera = truth.problem.camera;
+  Scene plain = truth, refined = truth;
+  for (Scene* s : {&plain, &refined}) {
+    s->problem.camera.fx *= 1.02;
+    s->problem.camera.fy *= 1.02;
+    s->problem.camera.cx += 4.0;
+  }
+  BundleAdjustmentOptions options;
+  options.iterations = 100;
+  const BundleAdjustmentResult plain_result = BundleAdjust(plain.problem, options);
+  options.refine_intrinsics = true;
+  const BundleAdjustmentResult result = BundleAdjust(refined.problem, options);
+  ASSERT_TRUE(result.refined_camera.has_value());
+  EXPECT_FALSE(plain_result.refined_camera.has_value());
+  EXPECT_NEAR(result.refined_camera->fx, camera.fx, 0.5);
+  EXPECT_NEAR(result.refined_camera->fy, camera.fy, 0.5);
+  EXPECT_NEAR(result.refined_camera->cx, camera.cx, 0.5);
+  EXPECT_NEAR(result.refined_camera->cy, camera.cy, 0.5);
+  EXPECT_NEAR(result.refined_camera->distortion.k1, 0.0, 1e-3);
+  EXPECT_LT(result.final_rms, 1e-2);
+  EXPECT_GT(plain_result.final_rms, 10 * result.final_rms);
+  EXPECT_LT(MaxPoseError(refined), 0.5 * MaxPoseError(plain));
+  // The problem's own camera is left as it was given.
+  EXPECT_DOUBLE_EQ(refined.problem.camera.fx, 1.02 * camera.fx);
+}
+
+TEST(BundleAdjust, SelfCalibrationRefusesStereoProblems) {
+  Scene s = MakeScene(4, 50, 1, true, 0.0, 0.0, 8);
+  BundleAdjustmentOptions options;
+  options.refine_intrinsics = true;
+  EXPECT_THROW(BundleAdjust(s.problem, options), InvalidArgument);
+}
+
 TEST(BundleAdjust, StereoWithOneFixedPose) {
   Scene s = MakeScene(6, 200, 1, true, 0.0, 0.0, 2);
   BundleAdjustmentOptions options;

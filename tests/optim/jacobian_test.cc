@@ -113,6 +113,25 @@ TEST(OptimJacobians, Reprojection) {
   }
 }
 
+TEST(OptimJacobians, SelfCalibratingReprojection) {
+  std::mt19937 rng(3);
+  const PinholeCamera camera = KittiCamera();
+  const optim_internal::RigidLeftManifold manifold;
+  for (int trial = 0; trial < 5; ++trial) {
+    const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
+    const Eigen::Vector3d world =
+        camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30);
+    // [f, cx, cy, k1, k2]: the nominal camera, then one with distortion of both signs.
+    for (const std::vector<double>& k : std::vector<std::vector<double>>{
+             {camera.fx, camera.cx, camera.cy, 0.0, 0.0}, {0.98 * camera.fx, camera.cx + 4, camera.cy - 3, 0.05, -0.02}}) {
+      std::unique_ptr<ceres::CostFunction> cost(
+          optim_internal::NewSelfCalibratingReprojectionCost(Eigen::Vector2d(600, 180), 1.01, 0.8));
+      ExpectJacobiansMatch(*cost, {Packed(camera_from_world), {world.x(), world.y(), world.z()}, k},
+                           {&manifold, nullptr, nullptr});
+    }
+  }
+}
+
 TEST(OptimJacobians, RelativeSim3) {
   std::mt19937 rng(2);
   const optim_internal::Sim3RightManifold free_scale(false), fixed_scale(true);

@@ -1,10 +1,9 @@
 // Real data: KITTI odometry 07, frames 0-159 (left camera, ~91 m with a left turn), monocular, synchronous
-// pacing. A regression guard: the SPEC bar (ATE <= 0.3 m) is measured by the benchmarks; this test fails when
-// the system gets clearly worse (measured here: 0.305 m, initialization from frames 0 and 8, every frame from
-// frame 8 on tracked).
+// pacing. The SPEC bar is ATE <= 0.3 m; the default pacing's figures are in docs/results.md.
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
 
 #include "semslam/io/trajectory_io.h"
@@ -50,7 +49,7 @@ TEST(Kitti07, MonocularInitializesEarlyTracksEveryLaterFrameAndStaysAccurate) {
   // Accuracy: ATE after Sim(3) alignment.
   ASSERT_TRUE(j.contains("ate_rmse")) << j.dump(2);
   EXPECT_EQ(j.value("ate_alignment", ""), "sim3");
-  EXPECT_LE(j["ate_rmse"].get<double>(), 0.5);
+  EXPECT_LE(j["ate_rmse"].get<double>(), 0.3);  // measured 0.13-0.14 m (0.37 m without self-calibration)
   EXPECT_NEAR(j.value("path_length_m", 0.0), 90.6, 1.0);
   EXPECT_GE(j.value("ate_matched", 0), 160 - from);
 
@@ -63,6 +62,23 @@ TEST(Kitti07, MonocularInitializesEarlyTracksEveryLaterFrameAndStaysAccurate) {
   ASSERT_TRUE(ej.is_object()) << e.out;
   EXPECT_NEAR(ej["ate_rmse"].get<double>(), j["ate_rmse"].get<double>(), 1e-4);
   EXPECT_EQ(ej["matched"].get<size_t>(), trajectory.size());
+
+  // The published intrinsics are about 1 % off (docs/results.md): the final BA's self-calibration finds a
+  // shorter focal length (measured 699-701 px against 707.09), keeps it, and that is what meets the bar.
+  ASSERT_EQ(j.value("intrinsics_refinement", nlohmann::json()).size(), 1u) << j.dump(2);
+  const nlohmann::json& refinement = j["intrinsics_refinement"][0];
+  EXPECT_TRUE(refinement.value("accepted", false)) << refinement.dump(2);
+  EXPECT_LT(refinement["refined"]["fx"].get<double>(), 0.995 * refinement["nominal"]["fx"].get<double>());
+  const fs::path config = dir / "no_refinement.yaml";
+  std::ofstream(config) << "mapping:\n  final_refine_intrinsics: false\n";
+  const fs::path plain = dir / "plain";
+  const CommandResult p = RunSemslam({"run", "--sequence", sequence.string(), "--out", plain.string(), "--mode",
+                                      "mono", "--frames", "0:160", "--pacing", "synchronous", "--config",
+                                      config.string(), "-q"});
+  ASSERT_TRUE(p.Succeeded()) << p.Describe();
+  const nlohmann::json pj = ReadJson(plain / "run.json");
+  EXPECT_TRUE(pj.value("intrinsics_refinement", nlohmann::json{1}).empty());
+  EXPECT_GT(pj.value("ate_rmse", 0.0), 1.5 * j["ate_rmse"].get<double>());
 }
 
 }  // namespace

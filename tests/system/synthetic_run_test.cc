@@ -101,6 +101,16 @@ TEST_F(SyntheticRun, MonoWritesEveryOutputAndSummary) {
   sum += j["classes"].value("unlabeled", 0LL);
   EXPECT_EQ(sum, j["points"].get<long long>());
 
+  // The final BA's self-calibration reports on the one map; the city's camera is exact, so whatever it decided,
+  // the camera it found is within a fraction of a percent of the true one.
+  ASSERT_TRUE(j.contains("intrinsics_refinement") && j["intrinsics_refinement"].size() == 1)
+      << j.value("intrinsics_refinement", nlohmann::json()).dump();
+  const nlohmann::json& refinement = j["intrinsics_refinement"][0];
+  const double nominal_fx = refinement["nominal"]["fx"].get<double>();
+  EXPECT_NEAR(refinement["refined"]["fx"].get<double>(), nominal_fx, 0.005 * nominal_fx);
+  EXPECT_LE(refinement["refined_cost"].get<double>(), refinement["plain_cost"].get<double>());
+  EXPECT_EQ(refinement.contains("reason"), !refinement["accepted"].get<bool>());
+
   // timing.json: per-module times, tracking once per frame.
   const nlohmann::json timing = ReadJson(run / "timing.json");
   ASSERT_TRUE(timing.is_object() && timing.contains("tracking")) << ReadText(run / "timing.json");
@@ -552,6 +562,7 @@ TEST_F(SyntheticRun, StereoIsMetric) {
   EXPECT_EQ(j.value("ate_alignment", ""), "se3");
   EXPECT_LE(j["ate_rmse"].get<double>(), kStereoAteM);
   EXPECT_DOUBLE_EQ(j.value("ate_scale", 0.0), 1.0);
+  EXPECT_TRUE(j.value("intrinsics_refinement", nlohmann::json{1}).empty());  // stereo keeps the calibration
   const Trajectory trajectory = ReadTumTrajectory(run / "trajectory.tum");
   EXPECT_EQ(trajectory.size(), static_cast<size_t>(kSyntheticFrames));
 

@@ -1,5 +1,7 @@
 #include "semslam/mapping/map_optimization.h"
 
+#include <algorithm>
+#include <cmath>
 #include <unordered_map>
 
 #include "semslam/core/timing.h"
@@ -69,22 +71,89 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
   }
 }
 
-void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort) {
-  const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
+namespace {
+
+// Every keyframe and live point of one map of the atlas, as a bundle-adjustment problem.
+struct WholeMapProblem {
+  std::vector<KeyFrame*> keyframes;
   std::vector<MapPoint*> points;
-  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
-    if (!p->is_bad()) points.push_back(p);
-  }
   BundleAdjustmentProblem problem;
   std::vector<ObservationRef> refs;
-  BuildBundleAdjustmentProblem(keyframes, {}, points, &problem, &refs);
+};
+
+WholeMapProblem BuildWholeMapProblem(const Map& map, std::uint32_t map_id) {
+  WholeMapProblem whole;
+  whole.keyframes = map.KeyFramesOfMap(map_id);
+  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
+    if (!p->is_bad()) whole.points.push_back(p);
+  }
+  BuildBundleAdjustmentProblem(whole.keyframes, {}, whole.points, &whole.problem, &whole.refs);
+  return whole;
+}
+
+// Runs the BA (keeping every observation) and writes its result into the map.
+BundleAdjustmentResult AdjustWholeMap(Map& map, WholeMapProblem& whole, const BundleAdjustmentOptions& options) {
+  const BundleAdjustmentResult result = BundleAdjust(whole.problem, options);
+  ApplyBundleAdjustment(map, whole.problem, result, whole.keyframes, whole.points, whole.refs, false);
+  return result;
+}
+
+BundleAdjustmentOptions WholeMapOptions(int iterations) {
   BundleAdjustmentOptions options;
   options.iterations = iterations;
-  options.abort = abort;
   options.refine_without_outliers = false;
-  const BundleAdjustmentResult result = BundleAdjust(problem, options);
-  ApplyBundleAdjustment(map, problem, result, keyframes, points, refs, false);
+  return options;
+}
+
+}  // namespace
+
+void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort) {
+  WholeMapProblem whole = BuildWholeMapProblem(map, map_id);
+  BundleAdjustmentOptions options = WholeMapOptions(iterations);
+  options.abort = abort;
+  AdjustWholeMap(map, whole, options);
   ReleaseFreeMemory();
+}
+
+IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations,
+                                                           double min_cost_reduction) {
+  IntrinsicsRefinement refinement;
+  refinement.map_id = map_id;
+  WholeMapProblem whole = BuildWholeMapProblem(map, map_id);
+  BundleAdjustmentProblem& problem = whole.problem;
+  refinement.nominal = problem.camera;
+  refinement.refined = problem.camera;
+  // The plain BA first: the map keeps its result unless the refinement earns its five parameters.
+  BundleAdjustmentOptions options = WholeMapOptions(iterations);
+  const BundleAdjustmentResult plain = AdjustWholeMap(map, whole, options);
+  refinement.plain_cost = plain.final_capped_chi2;
+  const bool monocular = std::none_of(problem.observations.begin(), problem.observations.end(),
+                                      [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
+  if (!monocular) {
+    refinement.reason = "the map has stereo observations";
+  } else if (!problem.observations.empty()) {
+    options.refine_intrinsics = true;
+    const BundleAdjustmentResult result = BundleAdjust(problem, options);
+    const PinholeCamera& nominal = problem.camera;
+    const PinholeCamera& refined = *result.refined_camera;
+    refinement.refined = refined;
+    refinement.refined_cost = result.final_capped_chi2;
+    if (refinement.plain_cost - refinement.refined_cost < min_cost_reduction * refinement.plain_cost) {
+      refinement.reason = "it lowered the cost too little to be told from noise";
+    } else if (std::abs(refined.fx / nominal.fx - 1.0) > 0.10) {
+      refinement.reason = "the focal length moved more than 10 %";
+    } else if (std::abs(refined.cx - nominal.cx) > 0.05 * nominal.width ||
+               std::abs(refined.cy - nominal.cy) > 0.05 * nominal.height) {
+      refinement.reason = "the principal point moved more than 5 % of the image";
+    } else if (std::abs(refined.distortion.k1) > 0.2 || std::abs(refined.distortion.k2) > 0.2) {
+      refinement.reason = "the radial distortion came out above 0.2";
+    } else {
+      refinement.accepted = true;
+      ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, whole.refs, false);
+    }
+  }
+  ReleaseFreeMemory();
+  return refinement;
 }
 
 int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12,

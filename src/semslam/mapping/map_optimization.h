@@ -3,6 +3,7 @@
 // points, global BA applied to the map, and the Sim(3) refinement of a loop.
 
 #include <atomic>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -33,6 +34,27 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 
 // Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort);
+
+// What the self-calibrating global BA of one map did.
+struct IntrinsicsRefinement {
+  std::uint32_t map_id = 0;
+  bool accepted = false;  // the map keeps the poses and points of the refined camera
+  std::string reason;     // why not, when not accepted
+  PinholeCamera nominal;
+  PinholeCamera refined;
+  // BundleAdjustmentResult::final_capped_chi2 of the plain BA, and of the refinement that followed it.
+  double plain_cost = 0.0, refined_cost = 0.0;
+};
+
+// The global BA of a monocular map, then one that also refines the intrinsics
+// (BundleAdjustmentOptions::refine_intrinsics) from its result. The map keeps the refinement only when it earns
+// its five parameters, lowering the robust cost by at least `min_cost_reduction` of it, and is plausible:
+// focal length within 10 % of the nominal one, principal point within 5 % of the image size, |k1|, |k2| < 0.2.
+// Otherwise, and for a map with stereo observations, it keeps the plain BA's result. The keyframes keep the
+// nominal camera: the refinement corrects the poses and points, which is where a slightly wrong calibration
+// bends the trajectory. Write lock held by the caller.
+IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations,
+                                                           double min_cost_reduction);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
 // cleared from `matches12`. Returns the inlier count. Read lock.

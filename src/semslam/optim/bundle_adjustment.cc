@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -90,6 +92,91 @@ class ReprojectionCost final : public ceres::SizedCostFunction<N, kRigidSize, 3>
   double sqrt_info_;
 };
 
+// Monocular reprojection with the intrinsics as a parameter block [f, cx, cy, k1, k2] (fy = f * aspect), the
+// model of PinholeCamera::Project with radial distortion; the pose Jacobian in the tangent space of
+// RigidLeftManifold, as ReprojectionCost has it.
+class SelfCalibratingReprojectionCost final : public ceres::SizedCostFunction<2, kRigidSize, 3, 5> {
+ public:
+  SelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel, double aspect, double sqrt_info)
+      : pixel_(pixel), aspect_(aspect), sqrt_info_(sqrt_info) {}
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Eigen::Map<const Eigen::Quaterniond> q(parameters[0]);
+    const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
+    const Eigen::Map<const Eigen::Vector3d> x(parameters[1]);
+    const double* k = parameters[2];
+    const Eigen::Vector3d p = q * x + t;
+    if (!(p.z() > 1e-9)) return false;
+    const double iz = 1.0 / p.z();
+    const double nx = p.x() * iz, ny = p.y() * iz;
+    const double r2 = nx * nx + ny * ny;
+    const double radial = 1.0 + k[3] * r2 + k[4] * r2 * r2;
+    const double f = k[0], fy = k[0] * aspect_;
+    residuals[0] = sqrt_info_ * (f * radial * nx + k[1] - pixel_.x());
+    residuals[1] = sqrt_info_ * (fy * radial * ny + k[2] - pixel_.y());
+    if (jacobians == nullptr) return true;
+    // d(u, v) / d(nx, ny), then through n = (x / z, y / z).
+    const double dradial = 2.0 * (k[3] + 2.0 * k[4] * r2);  // d radial / d r2 * 2
+    Eigen::Matrix2d d_uv_d_n;
+    d_uv_d_n << f * (radial + nx * nx * dradial), f * nx * ny * dradial, fy * nx * ny * dradial,
+        fy * (radial + ny * ny * dradial);
+    Eigen::Matrix<double, 2, 3> d_n_d_p;
+    d_n_d_p << iz, 0.0, -nx * iz, 0.0, iz, -ny * iz;
+    const Eigen::Matrix<double, 2, 3> a = sqrt_info_ * d_uv_d_n * d_n_d_p;
+    if (jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, 2, kRigidSize, Eigen::RowMajor>> j(jacobians[0]);
+      for (int r = 0; r < 2; ++r) {
+        const Eigen::Vector3d row = a.row(r).transpose();
+        j.block<1, 3>(r, 0) = row.transpose();
+        j.block<1, 3>(r, 3) = p.cross(row).transpose();
+        j(r, 6) = 0.0;
+      }
+    }
+    if (jacobians[1] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> j(jacobians[1]);
+      j.noalias() = a * q.toRotationMatrix();
+    }
+    if (jacobians[2] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, 2, 5, Eigen::RowMajor>> j(jacobians[2]);
+      j << radial * nx, 1.0, 0.0, f * nx * r2, f * nx * r2 * r2,  //
+          aspect_ * radial * ny, 0.0, 1.0, fy * ny * r2, fy * ny * r2 * r2;
+      j *= sqrt_info_;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector2d pixel_;
+  double aspect_;
+  double sqrt_info_;
+};
+
+// Weak priors at the nominal intrinsics: they decide only what the images cannot (straight driving says
+// little about the focal length).
+struct IntrinsicsPrior {
+  double focal, cx, cy;
+  double focal_sigma, cx_sigma, cy_sigma, distortion_sigma;
+
+  template <typename T>
+  bool operator()(const T* k, T* e) const {
+    e[0] = (k[0] - T(focal)) / T(focal_sigma);
+    e[1] = (k[1] - T(cx)) / T(cx_sigma);
+    e[2] = (k[2] - T(cy)) / T(cy_sigma);
+    e[3] = k[3] / T(distortion_sigma);
+    e[4] = k[4] / T(distortion_sigma);
+    return true;
+  }
+};
+
+// Whitened squared error of a monocular observation under `camera` (which may carry radial distortion).
+double Chi2WithCamera(const BundleAdjustmentProblem& problem, const BundleAdjustmentObservation& o,
+                      const PinholeCamera& camera) {
+  const Eigen::Vector3d p =
+      problem.camera_from_world[static_cast<size_t>(o.pose)] * problem.points[static_cast<size_t>(o.point)];
+  if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
+  return (camera.Project(p) - o.pixel).squaredNorm() * o.inv_sigma2;
+}
+
 class AbortCallback final : public ceres::IterationCallback {
  public:
   explicit AbortCallback(std::atomic<bool>* abort) : abort_(abort) {}
@@ -156,6 +243,11 @@ double Chi2Threshold(const BundleAdjustmentObservation& o, const BundleAdjustmen
 
 }  // namespace
 
+ceres::CostFunction* optim_internal::NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel,
+                                                                        double aspect, double sqrt_info) {
+  return new SelfCalibratingReprojectionCost(pixel, aspect, sqrt_info);
+}
+
 ceres::CostFunction* optim_internal::NewReprojectionCost(const PinholeCamera& camera, double bf,
                                                          const Eigen::Vector2d& pixel, double right_u,
                                                          double sqrt_info) {
@@ -188,6 +280,11 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
   BundleAdjustmentResult result;
   result.outlier.assign(num_obs, false);
   if (num_obs == 0) return result;
+  if (options.refine_intrinsics) {
+    for (const BundleAdjustmentObservation& o : problem.observations) {
+      Require(o.right_u < 0, "bundle adjustment: refine_intrinsics needs a monocular problem");
+    }
+  }
 
   const Intrinsics k{problem.camera.fx, problem.camera.fy, problem.camera.cx, problem.camera.cy,
                      problem.camera.fx * problem.baseline};
@@ -214,6 +311,23 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
   ceres::LossFunctionWrapper loss_stereo(new ceres::HuberLoss(std::sqrt(options.chi2_stereo)),
                                          ceres::TAKE_OWNERSHIP);
 
+  // Self-calibration: [f, cx, cy, k1, k2].
+  const double aspect = problem.camera.fy / problem.camera.fx;
+  std::array<double, 5> intrinsics = {problem.camera.fx, problem.camera.cx, problem.camera.cy, 0.0, 0.0};
+  PinholeCamera camera = problem.camera;  // the camera the state is scored with
+  auto update_camera = [&] {
+    if (!options.refine_intrinsics) return;
+    camera.fx = intrinsics[0];
+    camera.fy = intrinsics[0] * aspect;
+    camera.cx = intrinsics[1];
+    camera.cy = intrinsics[2];
+    camera.distortion.k1 = intrinsics[3];
+    camera.distortion.k2 = intrinsics[4];
+  };
+  auto chi2_now = [&](const BundleAdjustmentObservation& o) {
+    return options.refine_intrinsics ? Chi2WithCamera(problem, o, camera) : ReprojectionChi2(problem, o);
+  };
+
   std::vector<ceres::ResidualBlockId> residual_ids(num_obs, nullptr);
   std::vector<unsigned char> pose_used(problem.camera_from_world.size(), 0);
   std::vector<unsigned char> point_used(problem.points.size(), 0);
@@ -234,13 +348,25 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     }
     point_used[pj] = 1;
     const double sqrt_info = std::sqrt(o.inv_sigma2);
-    if (o.right_u >= 0) {
+    if (options.refine_intrinsics) {
+      residual_ids[i] = ceres_problem.AddResidualBlock(
+          new SelfCalibratingReprojectionCost(o.pixel, aspect, sqrt_info), &loss_mono, pose, point,
+          intrinsics.data());
+    } else if (o.right_u >= 0) {
       residual_ids[i] = ceres_problem.AddResidualBlock(
           new ReprojectionCost<3>(k, o.pixel, o.right_u, sqrt_info), &loss_stereo, pose, point);
     } else {
       residual_ids[i] = ceres_problem.AddResidualBlock(
           new ReprojectionCost<2>(k, o.pixel, o.right_u, sqrt_info), &loss_mono, pose, point);
     }
+  }
+
+  if (options.refine_intrinsics) {
+    const PinholeCamera& c = problem.camera;
+    ceres_problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<IntrinsicsPrior, 5, 5>(new IntrinsicsPrior{
+            c.fx, c.cx, c.cy, 0.05 * c.fx, 0.05 * std::max(c.width, 1), 0.05 * std::max(c.height, 1), 0.1}),
+        nullptr, intrinsics.data());
   }
 
   int num_free_poses = 0;
@@ -253,6 +379,7 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     ordering->AddElementToGroup(&poses[i * kRigidSize], 1);
     num_free_poses += problem.pose_fixed[i] ? 0 : 1;
   }
+  if (options.refine_intrinsics) ordering->AddElementToGroup(intrinsics.data(), 1);
 
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = LinearSolver(options.solver, num_free_poses);
@@ -285,6 +412,7 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     for (size_t j = 0; j < problem.points.size(); ++j) {
       if (point_used[j]) problem.points[j] = Eigen::Map<const Eigen::Vector3d>(&points[j * 3]);
     }
+    update_camera();
   };
 
   solve(options.iterations);
@@ -293,7 +421,7 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     for (size_t i = 0; i < num_obs; ++i) {
       if (residual_ids[i] == nullptr) continue;
       const BundleAdjustmentObservation& o = problem.observations[i];
-      if (ReprojectionChi2(problem, o) > Chi2Threshold(o, options)) {
+      if (chi2_now(o) > Chi2Threshold(o, options)) {
         result.outlier[i] = true;
         ceres_problem.RemoveResidualBlock(residual_ids[i]);
         residual_ids[i] = nullptr;
@@ -310,7 +438,7 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
   for (size_t i = 0; i < num_obs; ++i) {
     if (result.outlier[i]) continue;
     const BundleAdjustmentObservation& o = problem.observations[i];
-    const double chi2 = ReprojectionChi2(problem, o);
+    const double chi2 = chi2_now(o);
     if (chi2 > Chi2Threshold(o, options)) {  // also catches points now behind the camera (infinite chi2)
       result.outlier[i] = true;
       continue;
@@ -319,11 +447,18 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     final_sum += chi2;
     ++counted;
   }
+  for (size_t i = 0; i < num_obs; ++i) {
+    const BundleAdjustmentObservation& o = problem.observations[i];
+    const double threshold = Chi2Threshold(o, options);
+    result.initial_capped_chi2 += std::min(initial_chi2[i], threshold);
+    result.final_capped_chi2 += std::min(chi2_now(o), threshold);
+  }
   for (size_t i = 0; i < num_obs; ++i) result.num_outliers += result.outlier[i] ? 1 : 0;
   if (counted > 0) {
     result.initial_rms = std::sqrt(initial_sum / counted);
     result.final_rms = std::sqrt(final_sum / counted);
   }
+  if (options.refine_intrinsics) result.refined_camera = camera;
   return result;
 }
 

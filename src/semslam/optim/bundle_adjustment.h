@@ -5,6 +5,7 @@
 // camera_from_world; the gauge is fixed by the fixed poses (one for stereo, two for monocular maps).
 
 #include <atomic>
+#include <optional>
 #include <vector>
 
 #include "semslam/geometry/camera.h"
@@ -50,6 +51,11 @@ struct BundleAdjustmentOptions {
   std::atomic<bool>* abort = nullptr;
   BundleAdjustmentSolver solver = BundleAdjustmentSolver::kAuto;
   int num_threads = 1;
+  // Self-calibration, monocular problems only: the focal length (fx / fy kept), the principal point and two
+  // radial terms (k1, k2, applied to the undistorted keypoints) are refined too, under weak priors at the
+  // problem's camera. A published calibration a percent off bends monocular scale in slow turns; the camera
+  // found is returned in BundleAdjustmentResult::refined_camera, the problem's own camera is left alone.
+  bool refine_intrinsics = false;
 
   void Check() const;  // throws InvalidArgument
 };
@@ -62,7 +68,13 @@ struct BundleAdjustmentResult {
   int iterations = 0;        // over both passes
   double initial_rms = 0.0;  // RMS whitened reprojection error over the inliers before ...
   double final_rms = 0.0;    // ... and after the optimization
+  // The robust cost over every observation, each whitened squared error capped at its chi-square threshold
+  // (behind the camera: the threshold), before and after: comparable between runs on the same observations.
+  double initial_capped_chi2 = 0.0;
+  double final_capped_chi2 = 0.0;
   bool aborted = false;
+  // With refine_intrinsics: the camera the poses and points were optimized with.
+  std::optional<PinholeCamera> refined_camera;
 };
 
 // Optimizes the free poses and every observed point in place. Throws InvalidArgument on a bad problem

@@ -15,6 +15,11 @@ namespace semslam::optim_internal {
 ceres::CostFunction* NewReprojectionCost(const PinholeCamera& camera, double bf, const Eigen::Vector2d& pixel,
                                          double right_u, double sqrt_info);
 
+// Self-calibrating monocular bundle adjustment: parameters camera_from_world (RigidLeftManifold), a world
+// point and the intrinsics [f, cx, cy, k1, k2] (fy = f * aspect, radial distortion as PinholeCamera::Project).
+ceres::CostFunction* NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel, double aspect,
+                                                        double sqrt_info);
+
 // Pose graph: parameters world_from_a, world_from_b (Sim3RightManifold); the residual is multiplied by
 // sqrt_information.
 ceres::CostFunction* NewRelativeSim3Cost(const Sim3d& a_from_b,

@@ -47,6 +47,28 @@ nlohmann::json AtlasJson(const SlamSystem& slam) {
           {"merge_events", merges}, {"sessions", sessions}};
 }
 
+nlohmann::json IntrinsicsRefinementJson(const SlamSystem& slam) {
+  nlohmann::json refinements = nlohmann::json::array();
+  for (const IntrinsicsRefinement& r : slam.IntrinsicsRefinements()) {
+    nlohmann::json entry = {
+        {"map", r.map_id},
+        {"accepted", r.accepted},
+        {"nominal", {{"fx", r.nominal.fx}, {"fy", r.nominal.fy}, {"cx", r.nominal.cx}, {"cy", r.nominal.cy}}},
+        {"refined",
+         {{"fx", r.refined.fx},
+          {"fy", r.refined.fy},
+          {"cx", r.refined.cx},
+          {"cy", r.refined.cy},
+          {"k1", r.refined.distortion.k1},
+          {"k2", r.refined.distortion.k2}}},
+        {"plain_cost", r.plain_cost},
+        {"refined_cost", r.refined_cost}};
+    if (!r.accepted) entry["reason"] = r.reason;
+    refinements.push_back(std::move(entry));
+  }
+  return refinements;
+}
+
 void WriteFramesCsv(const std::filesystem::path& path, const SlamSystem& slam) {
   const std::uint32_t main = slam.MainMapId();
   std::string text = "frame,timestamp,map,source,in_main_map,tx,ty,tz,qx,qy,qz,qw\n";

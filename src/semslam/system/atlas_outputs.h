@@ -17,6 +17,11 @@ nlohmann::json LoopEventJson(const LoopEvent& e);
 //  "merge_events": [...], "sessions": [...]} after Finish().
 nlohmann::json AtlasJson(const SlamSystem& slam);
 
+// The final bundle adjustment's self-calibration per monocular map: [{"map", "accepted", "reason" (when not),
+// "nominal": {fx, fy, cx, cy}, "refined": {fx, fy, cx, cy, k1, k2}, "plain_cost", "refined_cost"}] after
+// Finish().
+nlohmann::json IntrinsicsRefinementJson(const SlamSystem& slam);
+
 // One line per frame of the run with a pose: frame, timestamp, map, source (tracked: tracked, relocalized
 // or posed at a monocular initialization; predicted: the motion model's while lost), in_main_map (0/1: frames
 // of maps never merged into the main one are 0), and the pose in its map (tx ty tz qx qy qz qw,

@@ -390,6 +390,7 @@ RunSummary RunSequence(const RunOptions& options) {
   }
   run["loop_events"] = loops;
   run["maps"] = AtlasJson(slam);
+  run["intrinsics_refinement"] = IntrinsicsRefinementJson(slam);
   run["classes"] = ClassCountsJson(CountLabels(semantic_points));
   nlohmann::json segmentation = {{"segmenter", segmenter_description},
                                  {"segmented_keyframes", stats.segmented_keyframes},

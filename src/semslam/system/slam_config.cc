@@ -77,6 +77,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"local_ba_iterations", Bind(&o->mapper.local_ba_iterations)},
       {"min_parallax_deg", Bind(&o->mapper.min_parallax_deg)},
       {"final_global_ba", Bind(&o->final_global_ba)},
+      {"final_refine_intrinsics", Bind(&o->final_refine_intrinsics)},
+      {"final_refine_intrinsics_min_reduction", Bind(&o->final_refine_intrinsics_min_reduction)},
       {"max_queued_keyframes", Bind(&o->max_queued_keyframes)},
       {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
   };

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <thread>
 
@@ -41,6 +42,10 @@ std::string_view PacingName(Pacing pacing) {
 
 void SlamOptions::Check() const {
   Require(max_queued_keyframes >= 0, "max_queued_keyframes must be >= 0");
+  Require(final_global_ba_iterations >= 1, "final_global_ba_iterations must be >= 1");
+  Require(std::isfinite(final_refine_intrinsics_min_reduction) && final_refine_intrinsics_min_reduction >= 0 &&
+              final_refine_intrinsics_min_reduction < 1,
+          "final_refine_intrinsics_min_reduction must be in [0, 1)");
   tracker.Check();
   mapper.Check();
   loop.Check();
@@ -249,9 +254,25 @@ void SlamSystem::Finish() {
   if (options_.final_global_ba && !options_.localization_only) {
     ScopedTimer timer(timing_, "final_global_ba");
     auto lock = map_->WriteLock();
+    const bool refine = options_.final_refine_intrinsics && options_.mode == SensorMode::kMonocular;
     for (const std::uint32_t map_id : map_->MapIds()) {
-      if (map_->NumKeyFramesOfMap(map_id) > 2)
+      if (map_->NumKeyFramesOfMap(map_id) <= 2) continue;
+      if (refine) {
+        const IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back(
+            SelfCalibratingGlobalBundleAdjustment(*map_, map_id, options_.final_global_ba_iterations,
+                                                  options_.final_refine_intrinsics_min_reduction));
+        if (r.accepted) {
+          spdlog::info("map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
+                       "point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; cost {:.0f} -> {:.0f}",
+                       map_id, r.nominal.fx, r.refined.fx, r.nominal.cx, r.nominal.cy, r.refined.cx, r.refined.cy,
+                       r.refined.distortion.k1, r.refined.distortion.k2, r.plain_cost, r.refined_cost);
+        } else {
+          spdlog::info("map {}: the intrinsics stay as given: {} (f {:.1f} -> {:.1f}, cost {:.0f} -> {:.0f})", map_id,
+                       r.reason, r.nominal.fx, r.refined.fx, r.plain_cost, r.refined_cost);
+        }
+      } else {
         GlobalBundleAdjustment(*map_, map_id, options_.final_global_ba_iterations, nullptr);
+      }
     }
   }
 }

@@ -23,6 +23,7 @@
 #include "semslam/map/map.h"
 #include "semslam/map/map_file.h"
 #include "semslam/mapping/local_mapper.h"
+#include "semslam/mapping/map_optimization.h"
 #include "semslam/semantics/segmentation_worker.h"
 #include "semslam/system/pacing.h"
 #include "semslam/tracking/tracker.h"
@@ -58,6 +59,11 @@ struct SlamOptions {
   bool exclude_dynamic = false;
   // A full bundle adjustment of the whole map when the sequence ends (trajectories follow their keyframes).
   bool final_global_ba = true;
+  // Monocular maps: that bundle adjustment also refines the intrinsics (mapping/map_optimization.h), since
+  // monocular scale in slow turns is sensitive to a calibration a percent off.
+  bool final_refine_intrinsics = true;
+  // ... and keeps the refinement only when it lowers the robust reprojection cost by this share of it.
+  double final_refine_intrinsics_min_reduction = 0.01;
   // Keyframes waiting for the mapper: with more, tracking waits for it (on a busy machine a mapper that falls
   // behind leaves tracking without the points it needs at the next turn). 0: never wait.
   int max_queued_keyframes = 2;
@@ -106,6 +112,8 @@ class SlamSystem {
   // the keyframe sees now, and those that gain an observation in it later. Call before the first frame.
   void EnableSegmentation(std::shared_ptr<Segmenter> segmenter);
   std::optional<SegmentationWorkerStats> SegmentationStats() const;
+  // The final bundle adjustment's self-calibration, one entry per monocular map it ran on (after Finish).
+  const std::vector<IntrinsicsRefinement>& IntrinsicsRefinements() const { return intrinsics_refinements_; }
 
   // `color`: the image the segmenter sees, 8-bit BGR of a colour camera (empty: `left`, grey).
   TrackingResult ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
@@ -176,6 +184,7 @@ class SlamSystem {
   // The last frames' images: a monocular initialization makes a keyframe of an earlier frame.
   static constexpr size_t kRecentImages = 32;
   std::deque<std::pair<std::uint64_t, cv::Mat>> recent_images_;
+  std::vector<IntrinsicsRefinement> intrinsics_refinements_;
 };
 
 }  // namespace semslam
