@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "semslam/optim/cost_functions.h"
@@ -96,14 +97,18 @@ Sim3d RandomSim3(std::mt19937& rng, double log_scale_sigma) {
   return Sim3d(std::exp(n(rng)), QuaternionExp(RandomVector(rng, 0.8)), RandomVector(rng, 5.0));
 }
 
+// A random camera pose and a world point 3-30 m in front of it.
+std::pair<Rigid3d, Eigen::Vector3d> RandomPoseAndPoint(std::mt19937& rng, const PinholeCamera& camera) {
+  const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
+  return {camera_from_world, camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30)};
+}
+
 TEST(OptimJacobians, Reprojection) {
   std::mt19937 rng(1);
   const PinholeCamera camera = KittiCamera();
   const optim_internal::RigidLeftManifold manifold;
   for (int trial = 0; trial < 5; ++trial) {
-    const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
-    const Eigen::Vector3d world =
-        camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30);
+    const auto [camera_from_world, world] = RandomPoseAndPoint(rng, camera);
     for (const double right_u : {-1.0, 300.0}) {
       std::unique_ptr<ceres::CostFunction> cost(optim_internal::NewReprojectionCost(
           camera, camera.fx * 0.54, Eigen::Vector2d(600, 180), right_u, 0.8));
@@ -118,12 +123,11 @@ TEST(OptimJacobians, SelfCalibratingReprojection) {
   const PinholeCamera camera = KittiCamera();
   const optim_internal::RigidLeftManifold manifold;
   for (int trial = 0; trial < 5; ++trial) {
-    const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
-    const Eigen::Vector3d world =
-        camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30);
+    const auto [camera_from_world, world] = RandomPoseAndPoint(rng, camera);
     // [f, cx, cy, k1, k2]: the nominal camera, then one with distortion of both signs.
-    for (const std::vector<double>& k : std::vector<std::vector<double>>{
-             {camera.fx, camera.cx, camera.cy, 0.0, 0.0}, {0.98 * camera.fx, camera.cx + 4, camera.cy - 3, 0.05, -0.02}}) {
+    const std::vector<std::vector<double>> intrinsics = {
+        {camera.fx, camera.cx, camera.cy, 0.0, 0.0}, {0.98 * camera.fx, camera.cx + 4, camera.cy - 3, 0.05, -0.02}};
+    for (const std::vector<double>& k : intrinsics) {
       std::unique_ptr<ceres::CostFunction> cost(
           optim_internal::NewSelfCalibratingReprojectionCost(Eigen::Vector2d(600, 180), 1.01, 0.8));
       ExpectJacobiansMatch(*cost, {Packed(camera_from_world), {world.x(), world.y(), world.z()}, k},
