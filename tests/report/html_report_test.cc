@@ -106,6 +106,14 @@ json RunJson() {
       {"ate_alignment", "sim3"},
       {"ate_matched", 98},
       {"path_length_m", 100.0},
+      {"intrinsics_refinement",
+       json::array({{{"map", 0},
+                     {"accepted", true},
+                     {"nominal", {{"fx", 707.0912}, {"fy", 707.0912}, {"cx", 601.9}, {"cy", 183.1}}},
+                     {"refined",
+                      {{"fx", 699.9}, {"fy", 699.9}, {"cx", 601.1}, {"cy", 185.3}, {"k1", 0.0148}, {"k2", -0.0066}}},
+                     {"plain_cost", 8395.0},
+                     {"refined_cost", 8159.0}}})},
       {"classes", {{"road", 2000}, {"building", 2500}, {"car", 400}, {"unlabeled", 100}}},
       {"segmentation",
        {{"segmenter", "truth-noisy labels"},
@@ -275,6 +283,7 @@ TEST(HtmlReport, FullRunHasEverySection) {
   EXPECT_NE(summary.find("/data/city/sequences/00"), std::string::npos);
   EXPECT_NE(summary.find("98 (98.0&nbsp;%)"), std::string::npos);
   EXPECT_NE(summary.find("0.25&nbsp;m RMSE (Sim(3) alignment"), std::string::npos);
+  EXPECT_NE(summary.find("refined: f 707.1 &rarr; 699.9&nbsp;px, k1 0.0148"), std::string::npos) << summary;
   // The map labels by both measures, each named.
   EXPECT_NE(summary.find("94.0&nbsp;% of the map points carry the class of the surface they lie on (3D, "
                          "4&#8239;100 evaluated); the class at their keypoints (2D): 96.0&nbsp;%"),
@@ -564,6 +573,9 @@ TEST(HtmlReport, MalformedInputsAreInputErrorsNamingFileAndField) {
   expect_error(dir.path() / "run.json", R"({"frames": "many"})", "frames");
   expect_error(dir.path() / "run.json", R"({"geo": {"gps_fixes": 1.5, "georeferenced": true}})",
                "geo.gps_fixes");
+  expect_error(dir.path() / "run.json",
+               R"({"intrinsics_refinement": [{"map": 0, "nominal": {"fx": "f"}, "refined": {"fx": 1, "k1": 0}}]})",
+               "intrinsics_refinement.nominal.fx");
   expect_error(dir.path() / "timing.json", R"({"tracking": {"count": 3}})", "tracking.median_ms");
   expect_error(dir.path() / "landmarks.geojson", R"({"features": [{"properties": {"name": 3}}]})",
                "features[0].properties.name");

@@ -108,6 +108,28 @@ void AppendSummary(Page& page, const ReportInputs& in) {
   if (const auto v = f.Integer(run, "resets", "resets"); v && *v > 0) {
     rows.push_back({"Map resets", GroupThousands(*v)});
   }
+  if (const json* refinements = f.Array(run, "intrinsics_refinement", "intrinsics_refinement")) {
+    // The final BA's self-calibration, per monocular map (atlas_outputs.h).
+    for (const json& r : *refinements) {
+      const auto map_id = f.Integer(r, "map", "intrinsics_refinement.map");
+      const json* nominal = f.Object(r, "nominal", "intrinsics_refinement.nominal");
+      const json* refined = f.Object(r, "refined", "intrinsics_refinement.refined");
+      if (!map_id || nominal == nullptr || refined == nullptr) continue;
+      const auto fx0 = f.Number(*nominal, "fx", "intrinsics_refinement.nominal.fx");
+      const auto fx = f.Number(*refined, "fx", "intrinsics_refinement.refined.fx");
+      const auto k1 = f.Number(*refined, "k1", "intrinsics_refinement.refined.k1");
+      if (!fx0 || !fx || !k1) continue;
+      const bool accepted = f.Bool(r, "accepted", "intrinsics_refinement.accepted").value_or(false);
+      std::string value = accepted ? fmt::format("refined: f {:.1f} &rarr; {:.1f}&nbsp;px, k1 {:.4f}", *fx0, *fx, *k1)
+                                   : fmt::format("as given (f {:.1f}&nbsp;px)", *fx0);
+      if (!accepted) {
+        if (const auto reason = f.String(r, "reason", "intrinsics_refinement.reason")) {
+          value += ": " + HtmlEscape(*reason);
+        }
+      }
+      rows.push_back({refinements->size() > 1 ? fmt::format("Camera, map {}", *map_id) : "Camera", value});
+    }
+  }
   if (const auto seconds = f.Number(run, "seconds", "seconds")) {
     std::string value = fmt::format("{:.1f}&nbsp;s", *seconds);
     if (frames && *seconds > 0) value += fmt::format(" ({:.1f} frames/s overall)", *frames / *seconds);
