@@ -47,6 +47,21 @@ inline void Residual(const Intrinsics& k, const Eigen::Vector3d& p, const Eigen:
   if constexpr (N == 3) e[2] = sqrt_info * (u - k.bf * iz - right_u);
 }
 
+// The Jacobian of N residuals with respect to camera_from_world in RigidLeftManifold's tangent space
+// ([translation, rotation], the 7th ambient column zero), from `a`, their Jacobian with respect to the
+// camera-frame point p.
+template <int N>
+void WritePoseJacobian(const Eigen::Matrix<double, N, 3, Eigen::RowMajor>& a, const Eigen::Vector3d& p,
+                       double* jacobian) {
+  Eigen::Map<Eigen::Matrix<double, N, kRigidSize, Eigen::RowMajor>> j(jacobian);
+  for (int r = 0; r < N; ++r) {
+    const Eigen::Vector3d row = a.row(r).transpose();
+    j.template block<1, 3>(r, 0) = row.transpose();
+    j.template block<1, 3>(r, 3) = p.cross(row).transpose();
+    j(r, 6) = 0.0;
+  }
+}
+
 // Reprojection of a world point into a camera: parameters camera_from_world [q, t] (RigidLeftManifold) and
 // the point. N = 2: (u, v); N = 3: (u, v, u_right).
 template <int N>
@@ -69,15 +84,7 @@ class ReprojectionCost final : public ceres::SizedCostFunction<N, kRigidSize, 3>
     a.row(0) << s * k_.fx, 0.0, -s * k_.fx * p.x() * iz;
     a.row(1) << 0.0, s * k_.fy, -s * k_.fy * p.y() * iz;
     if constexpr (N == 3) a.row(2) << s * k_.fx, 0.0, -s * (k_.fx * p.x() - k_.bf) * iz;
-    if (jacobians[0] != nullptr) {
-      Eigen::Map<Eigen::Matrix<double, N, kRigidSize, Eigen::RowMajor>> j(jacobians[0]);
-      for (int r = 0; r < N; ++r) {
-        const Eigen::Vector3d row = a.row(r).transpose();
-        j.template block<1, 3>(r, 0) = row.transpose();
-        j.template block<1, 3>(r, 3) = p.cross(row).transpose();
-        j(r, 6) = 0.0;
-      }
-    }
+    if (jacobians[0] != nullptr) WritePoseJacobian<N>(a, p, jacobians[0]);
     if (jacobians[1] != nullptr) {
       Eigen::Map<Eigen::Matrix<double, N, 3, Eigen::RowMajor>> j(jacobians[1]);
       j.noalias() = a * q.toRotationMatrix();
@@ -123,15 +130,7 @@ class SelfCalibratingReprojectionCost final : public ceres::SizedCostFunction<2,
     Eigen::Matrix<double, 2, 3> d_n_d_p;
     d_n_d_p << iz, 0.0, -nx * iz, 0.0, iz, -ny * iz;
     const Eigen::Matrix<double, 2, 3> a = sqrt_info_ * d_uv_d_n * d_n_d_p;
-    if (jacobians[0] != nullptr) {
-      Eigen::Map<Eigen::Matrix<double, 2, kRigidSize, Eigen::RowMajor>> j(jacobians[0]);
-      for (int r = 0; r < 2; ++r) {
-        const Eigen::Vector3d row = a.row(r).transpose();
-        j.block<1, 3>(r, 0) = row.transpose();
-        j.block<1, 3>(r, 3) = p.cross(row).transpose();
-        j(r, 6) = 0.0;
-      }
-    }
+    if (jacobians[0] != nullptr) WritePoseJacobian<2>(a, p, jacobians[0]);
     if (jacobians[1] != nullptr) {
       Eigen::Map<Eigen::Matrix<double, 2, 3, Eigen::RowMajor>> j(jacobians[1]);
       j.noalias() = a * q.toRotationMatrix();
@@ -168,13 +167,23 @@ struct IntrinsicsPrior {
   }
 };
 
-// Whitened squared error of a monocular observation under `camera` (which may carry radial distortion).
-double Chi2WithCamera(const BundleAdjustmentProblem& problem, const BundleAdjustmentObservation& o,
-                      const PinholeCamera& camera) {
+// Whitened squared reprojection error of an observation under `camera`; +infinity behind it. A camera with
+// radial distortion is self-calibration's refined one (monocular problems only).
+double ObservationChi2(const BundleAdjustmentProblem& problem, const BundleAdjustmentObservation& o,
+                       const PinholeCamera& camera) {
   const Eigen::Vector3d p =
       problem.camera_from_world[static_cast<size_t>(o.pose)] * problem.points[static_cast<size_t>(o.point)];
   if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
-  return (camera.Project(p) - o.pixel).squaredNorm() * o.inv_sigma2;
+  if (!camera.distortion.IsZero()) return (camera.Project(p) - o.pixel).squaredNorm() * o.inv_sigma2;
+  const Intrinsics k{camera.fx, camera.fy, camera.cx, camera.cy, camera.fx * problem.baseline};
+  double e[3] = {0, 0, 0};
+  const double sqrt_info = std::sqrt(o.inv_sigma2);
+  if (o.right_u >= 0) {
+    Residual<3>(k, p, o.pixel, o.right_u, sqrt_info, e);
+  } else {
+    Residual<2>(k, p, o.pixel, o.right_u, sqrt_info, e);
+  }
+  return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
 }
 
 class AbortCallback final : public ceres::IterationCallback {
@@ -257,19 +266,7 @@ ceres::CostFunction* optim_internal::NewReprojectionCost(const PinholeCamera& ca
 }
 
 double ReprojectionChi2(const BundleAdjustmentProblem& problem, const BundleAdjustmentObservation& o) {
-  const Eigen::Vector3d p =
-      problem.camera_from_world[static_cast<size_t>(o.pose)] * problem.points[static_cast<size_t>(o.point)];
-  if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
-  const Intrinsics k{problem.camera.fx, problem.camera.fy, problem.camera.cx, problem.camera.cy,
-                     problem.camera.fx * problem.baseline};
-  double e[3] = {0, 0, 0};
-  const double sqrt_info = std::sqrt(o.inv_sigma2);
-  if (o.right_u >= 0) {
-    Residual<3>(k, p, o.pixel, o.right_u, sqrt_info, e);
-  } else {
-    Residual<2>(k, p, o.pixel, o.right_u, sqrt_info, e);
-  }
-  return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+  return ObservationChi2(problem, o, problem.camera);
 }
 
 BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
@@ -324,9 +321,7 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
     camera.distortion.k1 = intrinsics[3];
     camera.distortion.k2 = intrinsics[4];
   };
-  auto chi2_now = [&](const BundleAdjustmentObservation& o) {
-    return options.refine_intrinsics ? Chi2WithCamera(problem, o, camera) : ReprojectionChi2(problem, o);
-  };
+  auto chi2_now = [&](const BundleAdjustmentObservation& o) { return ObservationChi2(problem, o, camera); };
 
   std::vector<ceres::ResidualBlockId> residual_ids(num_obs, nullptr);
   std::vector<unsigned char> pose_used(problem.camera_from_world.size(), 0);
