@@ -31,6 +31,7 @@ void LoopCloserOptions::Check() const {
   Require(min_bow_matches >= 3 && min_sim3_inliers >= 3 && min_projected_matches >= 3,
           "loop closer: match thresholds must be >= 3");
   Require(global_ba_iterations > 0, "loop closer: global_ba_iterations must be positive");
+  Require(global_ba_window_keyframes >= 2, "loop closer: global_ba_window_keyframes must be >= 2");
   Require(min_verified_neighbours >= 0 && min_verified_neighbours <= 5 && verification_matches >= 3,
           "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
   Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,

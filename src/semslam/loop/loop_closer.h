@@ -72,6 +72,9 @@ struct LoopCloserOptions {
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
   int global_ba_iterations = 10;
+  // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map is
+  // adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).
+  int global_ba_window_keyframes = 500;
   bool enabled = true;
 
   void Check() const;

@@ -241,22 +241,11 @@ void LoopCloser::StopGlobalBundleAdjustment() {
 void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
   ScopedTimer timer(timing_, "global_ba");
   spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
-  BundleAdjustmentProblem problem;
-  std::vector<KeyFrame*> keyframes;
-  std::vector<MapPoint*> points;
-  {
-    auto lock = map_.ReadLock();
-    keyframes = map_.KeyFramesOfMap(map_id);
-    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
-      if (!p->is_bad()) points.push_back(p);
-    }
-    BuildBundleAdjustmentProblem(keyframes, {}, points, &problem, nullptr);
-  }
-  BundleAdjustmentOptions options;
+  GlobalBundleAdjustmentOptions options;
   options.iterations = options_.global_ba_iterations;
+  options.window_keyframes = options_.global_ba_window_keyframes;
   options.abort = &global_ba_abort_;
-  options.refine_without_outliers = false;
-  BundleAdjust(problem, options);
+  const GlobalBundleAdjustmentResult adjusted = AdjustMapInWindows(map_, map_id, options, /*lock_map=*/true);
   if (global_ba_abort_) {
     ReleaseFreeMemory();
     global_ba_running_ = false;
@@ -268,13 +257,10 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   {
     auto lock = map_.WriteLock();
-    std::unordered_map<const KeyFrame*, size_t> in_ba;
-    for (size_t i = 0; i < keyframes.size(); ++i) in_ba[keyframes[i]] = i;
     // Corrections before -> after per keyframe, propagated down the spanning tree.
     std::unordered_map<const KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
-    for (size_t i = 0; i < keyframes.size(); ++i) {
-      if (keyframes[i]->is_bad()) continue;
-      correction[keyframes[i]] = {keyframes[i]->camera_from_world(), problem.camera_from_world[i]};
+    for (const auto& [kf, camera_from_world] : adjusted.camera_from_world) {
+      if (!kf->is_bad()) correction[kf] = {kf->camera_from_world(), camera_from_world};
     }
     for (KeyFrame* kf : map_.KeyFramesOfMap(map_id)) {
       if (kf->is_bad() || correction.count(kf)) continue;
@@ -295,13 +281,11 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
       }
     }
     for (const auto& [kf, c] : correction) const_cast<KeyFrame*>(kf)->SetPose(c.second);
-    std::unordered_map<const MapPoint*, size_t> point_index;
-    for (size_t j = 0; j < points.size(); ++j) point_index[points[j]] = j;
     for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
       if (p->is_bad()) continue;
-      const auto it = point_index.find(p);
-      if (it != point_index.end()) {
-        p->SetPosition(problem.points[it->second]);
+      const auto it = adjusted.positions.find(p);
+      if (it != adjusted.positions.end()) {
+        p->SetPosition(it->second);
       } else if (p->reference_keyframe() != nullptr) {
         const auto c = correction.find(p->reference_keyframe());
         if (c != correction.end())
@@ -315,7 +299,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   ReleaseFreeMemory();  // the solver's working memory is several times the map's
   ++num_global_ba_;
   global_ba_running_ = false;
-  spdlog::info("global bundle adjustment done");
+  spdlog::info("global bundle adjustment done ({} window{})", adjusted.windows, adjusted.windows == 1 ? "" : "s");
 }
 
 }  // namespace semslam

@@ -2,8 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
+#include <shared_mutex>
 #include <unordered_map>
+#include <unordered_set>
 
+#include <fmt/format.h>
+
+#include "semslam/core/error.h"
 #include "semslam/core/timing.h"
 #include "semslam/optim/sim3_optimization.h"
 
@@ -71,69 +77,171 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
   }
 }
 
+void GlobalBundleAdjustmentOptions::Check() const {
+  Require(iterations >= 1, "global bundle adjustment: iterations must be >= 1");
+  Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
+}
+
+std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes) {
+  Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
+  const size_t window = static_cast<size_t>(window_keyframes);
+  if (num_keyframes <= window) return {{0, num_keyframes}};
+  // Windows overlap by at least half: a keyframe's last window then holds the keyframes after it free, not
+  // where the disturbance left them.
+  const size_t stride = window / 2;
+  const size_t count = (num_keyframes - window + stride - 1) / stride + 1;
+  std::vector<std::pair<size_t, size_t>> windows;
+  for (size_t w = 0; w < count; ++w) {
+    const size_t begin = (num_keyframes - window) * w / (count - 1);
+    windows.emplace_back(begin, begin + window);
+  }
+  return windows;
+}
+
 namespace {
 
-// Every keyframe and live point of one map of the atlas, as a bundle-adjustment problem.
-struct WholeMapProblem {
-  std::vector<KeyFrame*> keyframes;
+// One window of a global BA: its keyframes (free) and the live points they observe, started from the poses and
+// positions earlier windows found. The keyframes of earlier windows that observe those points hold still there;
+// those of later windows are left out: held where the disturbance left them, they would bend the window to fit
+// (a sweep whose every window stands on the ones before it restores what a whole-map BA restores).
+struct WindowProblem {
+  std::vector<KeyFrame*> keyframes;  // free, then fixed, as in the problem
   std::vector<MapPoint*> points;
   BundleAdjustmentProblem problem;
   std::vector<ObservationRef> refs;
 };
 
-WholeMapProblem BuildWholeMapProblem(const Map& map, std::uint32_t map_id) {
-  WholeMapProblem whole;
-  whole.keyframes = map.KeyFramesOfMap(map_id);
-  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
-    if (!p->is_bad()) whole.points.push_back(p);
+WindowProblem BuildWindowProblem(const Map& map, std::uint32_t map_id, const std::vector<KeyFrame*>& window,
+                                 const std::unordered_set<const KeyFrame*>& adjusted_before,
+                                 const GlobalBundleAdjustmentResult& earlier) {
+  WindowProblem built;
+  std::unordered_set<const KeyFrame*> free;
+  for (KeyFrame* kf : window) {
+    if (kf->is_bad()) continue;
+    built.keyframes.push_back(kf);
+    free.insert(kf);
   }
-  BuildBundleAdjustmentProblem(whole.keyframes, {}, whole.points, &whole.problem, &whole.refs);
-  return whole;
+  std::set<KeyFrame*, ById> fixed;
+  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
+    if (p->is_bad()) continue;
+    bool seen = false;
+    for (const auto& [kf, index] : p->observations()) seen = seen || free.count(kf) > 0;
+    if (!seen) continue;
+    built.points.push_back(p);
+    for (const auto& [kf, index] : p->observations()) {
+      if (!free.count(kf) && adjusted_before.count(kf) && !kf->is_bad()) fixed.insert(kf);
+    }
+  }
+  const std::vector<KeyFrame*> fixed_keyframes(fixed.begin(), fixed.end());
+  BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, &built.refs);
+  built.keyframes.insert(built.keyframes.end(), fixed_keyframes.begin(), fixed_keyframes.end());
+  for (size_t i = 0; i < built.keyframes.size(); ++i) {
+    const auto it = earlier.camera_from_world.find(built.keyframes[i]);
+    if (it != earlier.camera_from_world.end()) built.problem.camera_from_world[i] = it->second;
+  }
+  for (size_t j = 0; j < built.points.size(); ++j) {
+    const auto it = earlier.positions.find(built.points[j]);
+    if (it != earlier.positions.end()) built.problem.points[j] = it->second;
+  }
+  return built;
 }
 
-// Runs the BA (keeping every observation) and writes its result into the map.
-BundleAdjustmentResult AdjustWholeMap(Map& map, WholeMapProblem& whole, const BundleAdjustmentOptions& options) {
-  const BundleAdjustmentResult result = BundleAdjust(whole.problem, options);
-  ApplyBundleAdjustment(map, whole.problem, result, whole.keyframes, whole.points, whole.refs, false);
-  return result;
+BundleAdjustmentOptions SolverOptions(const GlobalBundleAdjustmentOptions& options) {
+  BundleAdjustmentOptions solver;
+  solver.iterations = options.iterations;
+  solver.refine_without_outliers = false;
+  solver.abort = options.abort;
+  return solver;
 }
 
-BundleAdjustmentOptions WholeMapOptions(int iterations) {
-  BundleAdjustmentOptions options;
-  options.iterations = iterations;
-  options.refine_without_outliers = false;
-  return options;
+void KeepWindow(const WindowProblem& window, GlobalBundleAdjustmentResult* result) {
+  for (size_t i = 0; i < window.keyframes.size(); ++i) {
+    if (!window.problem.pose_fixed[i])
+      result->camera_from_world[window.keyframes[i]] = window.problem.camera_from_world[i];
+  }
+  for (size_t j = 0; j < window.points.size(); ++j) result->positions[window.points[j]] = window.problem.points[j];
 }
 
 }  // namespace
 
-void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort) {
-  WholeMapProblem whole = BuildWholeMapProblem(map, map_id);
-  BundleAdjustmentOptions options = WholeMapOptions(iterations);
-  options.abort = abort;
-  AdjustWholeMap(map, whole, options);
+GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
+                                                const GlobalBundleAdjustmentOptions& options, bool lock_map) {
+  options.Check();
+  GlobalBundleAdjustmentResult result;
+  std::vector<KeyFrame*> keyframes;
+  {
+    std::shared_lock<std::shared_mutex> lock;
+    if (lock_map) lock = map.ReadLock();
+    keyframes = map.KeyFramesOfMap(map_id);
+  }
+  std::unordered_set<const KeyFrame*> adjusted_before;
+  for (const auto& [begin, end] : GlobalBundleAdjustmentWindows(keyframes.size(), options.window_keyframes)) {
+    if (options.abort != nullptr && options.abort->load()) break;
+    const std::vector<KeyFrame*> window(keyframes.begin() + static_cast<std::ptrdiff_t>(begin),
+                                        keyframes.begin() + static_cast<std::ptrdiff_t>(end));
+    WindowProblem built;
+    {
+      std::shared_lock<std::shared_mutex> lock;
+      if (lock_map) lock = map.ReadLock();
+      built = BuildWindowProblem(map, map_id, window, adjusted_before, result);
+    }
+    const BundleAdjustmentResult solved = BundleAdjust(built.problem, SolverOptions(options));
+    KeepWindow(built, &result);
+    adjusted_before.insert(window.begin(), window.end());
+    ++result.windows;
+    if (solved.aborted) break;
+  }
+  result.aborted = options.abort != nullptr && options.abort->load();
+  return result;
+}
+
+void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result) {
+  for (const auto& [kf, camera_from_world] : result.camera_from_world) {
+    if (!kf->is_bad()) const_cast<KeyFrame*>(kf)->SetPose(camera_from_world);
+  }
+  for (const auto& [p, position] : result.positions) {
+    if (p->is_bad()) continue;
+    MapPoint* point = const_cast<MapPoint*>(p);
+    point->SetPosition(position);
+    point->UpdateNormalAndDepth();
+  }
+}
+
+void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options) {
+  WriteGlobalBundleAdjustment(AdjustMapInWindows(map, map_id, options, /*lock_map=*/false));
   ReleaseFreeMemory();
 }
 
-IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations,
+IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
+                                                           const GlobalBundleAdjustmentOptions& options,
                                                            double min_cost_reduction) {
+  options.Check();
   IntrinsicsRefinement refinement;
   refinement.map_id = map_id;
-  WholeMapProblem whole = BuildWholeMapProblem(map, map_id);
-  BundleAdjustmentProblem& problem = whole.problem;
-  refinement.nominal = problem.camera;
-  refinement.refined = problem.camera;
+  const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
+  if (keyframes.empty()) return refinement;
+  refinement.nominal = keyframes.front()->camera();
+  refinement.refined = refinement.nominal;
+  if (keyframes.size() > static_cast<size_t>(options.window_keyframes)) {
+    GlobalBundleAdjustment(map, map_id, options);
+    refinement.reason = fmt::format("the map's {} keyframes are more than one bundle-adjustment window ({})",
+                                    keyframes.size(), options.window_keyframes);
+    return refinement;
+  }
   // The plain BA first: the map keeps its result unless the refinement earns its five parameters.
-  BundleAdjustmentOptions options = WholeMapOptions(iterations);
-  const BundleAdjustmentResult plain = AdjustWholeMap(map, whole, options);
+  WindowProblem whole = BuildWindowProblem(map, map_id, keyframes, {}, {});
+  BundleAdjustmentProblem& problem = whole.problem;
+  BundleAdjustmentOptions solver = SolverOptions(options);
+  const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
+  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs, false);
   refinement.plain_cost = plain.final_capped_chi2;
   const bool monocular = std::none_of(problem.observations.begin(), problem.observations.end(),
                                       [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
   if (!monocular) {
     refinement.reason = "the map has stereo observations";
   } else if (!problem.observations.empty()) {
-    options.refine_intrinsics = true;
-    const BundleAdjustmentResult result = BundleAdjust(problem, options);
+    solver.refine_intrinsics = true;
+    const BundleAdjustmentResult result = BundleAdjust(problem, solver);
     const PinholeCamera& nominal = problem.camera;
     const PinholeCamera& refined = *result.refined_camera;
     refinement.refined = refined;

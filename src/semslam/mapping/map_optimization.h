@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -32,8 +33,43 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
                            const std::vector<MapPoint*>& points, const std::vector<ObservationRef>& refs,
                            bool drop_outliers);
 
+// A global BA of bounded memory. The solver's working memory is about as large as the map itself, so a map of
+// more than `window_keyframes` keyframes is adjusted in a sweep of windows of its keyframes (by id, that is along
+// the drive), overlapping by half, each with the points its keyframes observe. The keyframes of earlier windows
+// that observe those points hold still where those windows put them. A map within one window gets the plain
+// global BA.
+struct GlobalBundleAdjustmentOptions {
+  int iterations = 10;
+  int window_keyframes = 500;
+  // Set (from another thread) to stop after the current solver iteration; no later window starts.
+  std::atomic<bool>* abort = nullptr;
+
+  void Check() const;  // throws InvalidArgument
+};
+
+// What a global BA found, not yet written into the map: the keyframes it moved and the points.
+struct GlobalBundleAdjustmentResult {
+  std::unordered_map<const KeyFrame*, Rigid3d> camera_from_world;
+  std::unordered_map<const MapPoint*, Eigen::Vector3d> positions;
+  int windows = 0;
+  bool aborted = false;
+};
+
+// [begin, end) of each window over `num_keyframes` keyframes: the fewest windows of at most `window_keyframes`,
+// of near-equal sizes.
+std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes);
+
+// Runs the global BA of one map of the atlas. With `lock_map`, each window is read under the map's read lock and
+// solved without it (the map may change meanwhile: keyframes and points that turn bad are skipped); without,
+// the caller holds a lock.
+GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
+                                                const GlobalBundleAdjustmentOptions& options, bool lock_map);
+
+// Writes the result into the map (skipping what turned bad) and updates the points' normals. Write lock.
+void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result);
+
 // Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
-void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations, std::atomic<bool>* abort);
+void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options);
 
 // What the self-calibrating global BA of one map did.
 struct IntrinsicsRefinement {
@@ -52,8 +88,10 @@ struct IntrinsicsRefinement {
 // focal length within 10 % of the nominal one, principal point within 5 % of the image size, |k1|, |k2| < 0.2.
 // Otherwise, and for a map with stereo observations, it keeps the plain BA's result. The keyframes keep the
 // nominal camera: the refinement corrects the poses and points, which is where a slightly wrong calibration
-// bends the trajectory. Write lock held by the caller.
-IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id, int iterations,
+// bends the trajectory. The intrinsics are shared by the whole map, so a map larger than one window
+// (GlobalBundleAdjustmentOptions) gets the windowed plain BA alone. Write lock held by the caller.
+IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
+                                                           const GlobalBundleAdjustmentOptions& options,
                                                            double min_cost_reduction);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are

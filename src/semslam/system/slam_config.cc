@@ -99,6 +99,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"merge_maps", Bind(&o->loop.merge_maps)},
       {"global_ba", Bind(&o->loop.global_ba)},
       {"global_ba_iterations", Bind(&o->loop.global_ba_iterations)},
+      {"global_ba_window_keyframes", Bind(&o->loop.global_ba_window_keyframes)},
   };
   s["place"] = {
       {"vocabulary", BindPath(&o->vocabulary)},

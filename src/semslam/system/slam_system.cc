@@ -255,11 +255,14 @@ void SlamSystem::Finish() {
     ScopedTimer timer(timing_, "final_global_ba");
     auto lock = map_->WriteLock();
     const bool refine = options_.final_refine_intrinsics && options_.mode == SensorMode::kMonocular;
+    GlobalBundleAdjustmentOptions global_ba;
+    global_ba.iterations = options_.final_global_ba_iterations;
+    global_ba.window_keyframes = options_.loop.global_ba_window_keyframes;
     for (const std::uint32_t map_id : map_->MapIds()) {
       if (map_->NumKeyFramesOfMap(map_id) <= 2) continue;
       if (refine) {
         const IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back(
-            SelfCalibratingGlobalBundleAdjustment(*map_, map_id, options_.final_global_ba_iterations,
+            SelfCalibratingGlobalBundleAdjustment(*map_, map_id, global_ba,
                                                   options_.final_refine_intrinsics_min_reduction));
         if (r.accepted) {
           spdlog::info("map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
@@ -271,7 +274,7 @@ void SlamSystem::Finish() {
                        r.reason, r.nominal.fx, r.refined.fx, r.plain_cost, r.refined_cost);
         }
       } else {
-        GlobalBundleAdjustment(*map_, map_id, options_.final_global_ba_iterations, nullptr);
+        GlobalBundleAdjustment(*map_, map_id, global_ba);
       }
     }
   }

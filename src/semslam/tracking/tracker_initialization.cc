@@ -122,7 +122,9 @@ bool Tracker::InitializeMonocular(Frame& frame) {
                init_frame_->id(), frame.id(), kf2->CountTrackedPoints(1), two_view.model);
 
   // Full bundle adjustment of the two views, then the scale: median scene depth 1.
-  GlobalBundleAdjustment(map_, map_id, 20, nullptr);
+  GlobalBundleAdjustmentOptions two_view_ba;
+  two_view_ba.iterations = 20;
+  GlobalBundleAdjustment(map_, map_id, two_view_ba);
   const double median_depth = kf1->SceneDepthQuantile(2);
   if (median_depth <= 0 || kf2->CountTrackedPoints(1) < options_.init_min_points) {
     spdlog::debug("frame {}: initialization rejected after BA (depth {}, {} points)", frame.id(),

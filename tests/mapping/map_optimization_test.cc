@@ -1,0 +1,185 @@
+// The global bundle adjustment of a map in windows: bounded problems that still bring a disturbed map back to
+// the truth.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "semslam/core/error.h"
+#include "semslam/map/map.h"
+#include "semslam/mapping/map_optimization.h"
+#include "support/kitti_camera.h"
+
+namespace semslam {
+namespace {
+
+TEST(GlobalBundleAdjustmentWindows, CoverTheKeyframesInTheFewestNearEqualWindows) {
+  using Ranges = std::vector<std::pair<size_t, size_t>>;
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(10, 500), (Ranges{{0, 10}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(10, 10), (Ranges{{0, 10}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(0, 4), (Ranges{{0, 0}}));
+  // Full windows overlapping by at least half of one, spread evenly.
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(11, 10), (Ranges{{0, 10}, {1, 11}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(12, 4), (Ranges{{0, 4}, {2, 6}, {4, 8}, {6, 10}, {8, 12}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(13, 4), (Ranges{{0, 4}, {1, 5}, {3, 7}, {5, 9}, {7, 11}, {9, 13}}));
+  EXPECT_THROW(GlobalBundleAdjustmentWindows(5, 1), InvalidArgument);
+  GlobalBundleAdjustmentOptions options;
+  options.window_keyframes = 1;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
+// A stereo drive of 24 keyframes, 2 m apart along a street whose walls hold points seen over 14 m; every keypoint
+// is the exact projection of its point.
+class DisturbedStreet : public ::testing::Test {
+ protected:
+  static constexpr int kKeyframes = 24;
+  static constexpr double kSpacing = 2.0;
+  static constexpr double kBaseline = 0.54;
+
+  void SetUp() override {
+    const PinholeCamera camera = KittiCamera();
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> along(0.0, kSpacing * kKeyframes + 14.0), height(-2.0, 2.0);
+    for (int i = 0; i < 900; ++i) truth_points_.emplace_back(i % 2 == 0 ? -6.0 : 6.0, height(rng), along(rng));
+    auto lock = map_.WriteLock();
+    std::vector<std::vector<int>> seen(kKeyframes);
+    for (int k = 0; k < kKeyframes; ++k) {
+      FeatureSet features;
+      features.pyramid = PyramidGeometry::Make(8, 1.2f);
+      features.image_width = camera.width;
+      features.image_height = camera.height;
+      std::vector<float> right_u, depth;
+      for (size_t j = 0; j < truth_points_.size(); ++j) {
+        const Eigen::Vector3d c = truth_points_[j] - Center(k);
+        if (c.z() < 2.0 || c.z() > 14.0) continue;
+        const double u = camera.fx * c.x() / c.z() + camera.cx, v = camera.fy * c.y() / c.z() + camera.cy;
+        if (u < 0 || u >= camera.width || v < 0 || v >= camera.height) continue;
+        Keypoint kp;
+        kp.pixel = Eigen::Vector2f(static_cast<float>(u), static_cast<float>(v));
+        features.keypoints.push_back(kp);
+        features.descriptors.push_back({});
+        right_u.push_back(static_cast<float>(u - camera.fx * kBaseline / c.z()));
+        depth.push_back(static_cast<float>(c.z()));
+        seen[static_cast<size_t>(k)].push_back(static_cast<int>(j));
+      }
+      Frame frame(static_cast<std::uint64_t>(k), 0.1 * k,
+                  MakeFrameData(camera, StereoRig{camera, kBaseline}, std::move(features), std::move(right_u),
+                                std::move(depth)));
+      frame.SetPose(Rigid3d(Eigen::Quaterniond::Identity(), -Center(k)));
+      keyframes_.push_back(map_.AddKeyFrame(frame));
+    }
+    points_.assign(truth_points_.size(), nullptr);
+    for (int k = 0; k < kKeyframes; ++k) {
+      KeyFrame* kf = keyframes_[static_cast<size_t>(k)];
+      const std::vector<int>& ids = seen[static_cast<size_t>(k)];
+      for (size_t index = 0; index < ids.size(); ++index) {
+        MapPoint*& p = points_[static_cast<size_t>(ids[index])];
+        if (p == nullptr) p = map_.AddMapPoint(truth_points_[static_cast<size_t>(ids[index])], kf);
+        kf->SetMapPoint(static_cast<int>(index), p);
+        p->AddObservation(kf, static_cast<int>(index));
+      }
+    }
+  }
+
+  // Moves the poses of keyframes [first, last) (never the origin) and every point by about 10 cm.
+  void Disturb(int first, int last) {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    for (int k = std::max(first, 1); k < last; ++k) {
+      const Eigen::Vector3d shift(noise(rng), noise(rng), noise(rng));
+      keyframes_[static_cast<size_t>(k)]->SetPose(Rigid3d(Eigen::Quaterniond::Identity(), -(Center(k) + shift)));
+    }
+    for (MapPoint* p : points_) {
+      if (p != nullptr) p->SetPosition(p->position() + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    }
+  }
+
+  static Eigen::Vector3d Center(int k) { return {0.0, 0.0, kSpacing * k}; }
+
+  double WorstCenterError() const {
+    double worst = 0.0;
+    for (size_t k = 0; k < keyframes_.size(); ++k)
+      worst = std::max(worst, (keyframes_[k]->center() - Center(static_cast<int>(k))).norm());
+    return worst;
+  }
+
+  double RmsPointError() const {
+    double sum = 0.0;
+    int n = 0;
+    for (size_t j = 0; j < points_.size(); ++j) {
+      if (points_[j] == nullptr) continue;
+      sum += (points_[j]->position() - truth_points_[j]).squaredNorm();
+      ++n;
+    }
+    return std::sqrt(sum / n);
+  }
+
+  Map map_;
+  std::vector<KeyFrame*> keyframes_;
+  std::vector<Eigen::Vector3d> truth_points_;
+  std::vector<MapPoint*> points_;
+};
+
+TEST_F(DisturbedStreet, OneWindowRestoresTheTruth) {
+  Disturb(0, kKeyframes);
+  ASSERT_GT(WorstCenterError(), 0.1);
+  GlobalBundleAdjustmentOptions options;
+  options.iterations = 20;
+  auto lock = map_.WriteLock();
+  const GlobalBundleAdjustmentResult result = AdjustMapInWindows(map_, 0, options, /*lock_map=*/false);
+  EXPECT_EQ(result.windows, 1);
+  EXPECT_EQ(result.camera_from_world.size(), keyframes_.size() - 1) << "all but the fixed origin";
+  WriteGlobalBundleAdjustment(result);
+  EXPECT_LT(WorstCenterError(), 0.005);
+  EXPECT_LT(RmsPointError(), 0.01);
+}
+
+// Windows of 12 keyframes, overlapping by half, restore the truth as the whole-map BA does: each stands on the
+// keyframes of the windows before it, the origin's first.
+TEST_F(DisturbedStreet, WindowsRestoreTheTruth) {
+  Disturb(0, kKeyframes);
+  ASSERT_GT(WorstCenterError(), 0.1);
+  ASSERT_GT(RmsPointError(), 0.1);
+  GlobalBundleAdjustmentOptions options;
+  options.iterations = 20;
+  options.window_keyframes = 12;
+  // Read under the map's own lock, as the loop closer's global BA does while the mapper runs.
+  const GlobalBundleAdjustmentResult result = AdjustMapInWindows(map_, 0, options, /*lock_map=*/true);
+  EXPECT_EQ(result.windows, 3);
+  EXPECT_FALSE(result.aborted);
+  EXPECT_EQ(result.camera_from_world.size(), keyframes_.size() - 1) << "all but the fixed origin";
+  const Rigid3d origin = keyframes_[0]->camera_from_world();
+  {
+    auto lock = map_.WriteLock();
+    WriteGlobalBundleAdjustment(result);
+  }
+  EXPECT_TRUE(keyframes_[0]->camera_from_world().translation.isApprox(origin.translation));
+  EXPECT_LT(WorstCenterError(), 0.01);
+  EXPECT_LT(RmsPointError(), 0.01);
+}
+
+TEST_F(DisturbedStreet, AnAbortedAdjustmentStopsBeforeTheNextWindow) {
+  std::atomic<bool> abort{true};
+  GlobalBundleAdjustmentOptions options;
+  options.window_keyframes = 12;
+  options.abort = &abort;
+  const GlobalBundleAdjustmentResult result = AdjustMapInWindows(map_, 0, options, /*lock_map=*/true);
+  EXPECT_TRUE(result.aborted);
+  EXPECT_EQ(result.windows, 0);
+}
+
+TEST_F(DisturbedStreet, SelfCalibrationIsLeftToMapsOfOneWindow) {
+  Disturb(10, 14);
+  GlobalBundleAdjustmentOptions options;
+  options.window_keyframes = 12;
+  auto lock = map_.WriteLock();
+  const IntrinsicsRefinement refinement = SelfCalibratingGlobalBundleAdjustment(map_, 0, options, 0.01);
+  EXPECT_FALSE(refinement.accepted);
+  EXPECT_NE(refinement.reason.find("more than one bundle-adjustment window"), std::string::npos)
+      << refinement.reason;
+  EXPECT_LT(WorstCenterError(), 0.01) << "the windowed plain BA ran instead";
+}
+
+}  // namespace
+}  // namespace semslam
