@@ -19,10 +19,9 @@ TEST(GlobalBundleAdjustmentWindows, CoverTheKeyframesInTheFewestNearEqualWindows
   EXPECT_EQ(GlobalBundleAdjustmentWindows(10, 500), (Ranges{{0, 10}}));
   EXPECT_EQ(GlobalBundleAdjustmentWindows(10, 10), (Ranges{{0, 10}}));
   EXPECT_EQ(GlobalBundleAdjustmentWindows(0, 4), (Ranges{{0, 0}}));
-  // Full windows overlapping by at least half of one, spread evenly.
-  EXPECT_EQ(GlobalBundleAdjustmentWindows(11, 10), (Ranges{{0, 10}, {1, 11}}));
-  EXPECT_EQ(GlobalBundleAdjustmentWindows(12, 4), (Ranges{{0, 4}, {2, 6}, {4, 8}, {6, 10}, {8, 12}}));
-  EXPECT_EQ(GlobalBundleAdjustmentWindows(13, 4), (Ranges{{0, 4}, {1, 5}, {3, 7}, {5, 9}, {7, 11}, {9, 13}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(11, 10), (Ranges{{0, 5}, {5, 11}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(12, 4), (Ranges{{0, 4}, {4, 8}, {8, 12}}));
+  EXPECT_EQ(GlobalBundleAdjustmentWindows(13, 4), (Ranges{{0, 3}, {3, 6}, {6, 9}, {9, 13}}));
   EXPECT_THROW(GlobalBundleAdjustmentWindows(5, 1), InvalidArgument);
   GlobalBundleAdjustmentOptions options;
   options.window_keyframes = 1;
@@ -135,15 +134,15 @@ TEST_F(DisturbedStreet, OneWindowRestoresTheTruth) {
   EXPECT_LT(RmsPointError(), 0.01);
 }
 
-// Windows of 12 keyframes, overlapping by half, restore the truth as the whole-map BA does: each stands on the
-// keyframes of the windows before it, the origin's first.
+// Windows of 8 keyframes restore the truth as the whole-map BA does: each stands on the keyframes of the windows
+// before it, the origin's first.
 TEST_F(DisturbedStreet, WindowsRestoreTheTruth) {
   Disturb(0, kKeyframes);
   ASSERT_GT(WorstCenterError(), 0.1);
   ASSERT_GT(RmsPointError(), 0.1);
   GlobalBundleAdjustmentOptions options;
   options.iterations = 20;
-  options.window_keyframes = 12;
+  options.window_keyframes = 8;
   // Read under the map's own lock, as the loop closer's global BA does while the mapper runs.
   const GlobalBundleAdjustmentResult result = AdjustMapInWindows(map_, 0, options, /*lock_map=*/true);
   EXPECT_EQ(result.windows, 3);

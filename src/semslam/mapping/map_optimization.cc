@@ -85,16 +85,9 @@ void GlobalBundleAdjustmentOptions::Check() const {
 std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes) {
   Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
   const size_t window = static_cast<size_t>(window_keyframes);
-  if (num_keyframes <= window) return {{0, num_keyframes}};
-  // Windows overlap by at least half: a keyframe's last window then holds the keyframes after it free, not
-  // where the disturbance left them.
-  const size_t stride = window / 2;
-  const size_t count = (num_keyframes - window + stride - 1) / stride + 1;
+  const size_t count = std::max<size_t>(1, (num_keyframes + window - 1) / window);
   std::vector<std::pair<size_t, size_t>> windows;
-  for (size_t w = 0; w < count; ++w) {
-    const size_t begin = (num_keyframes - window) * w / (count - 1);
-    windows.emplace_back(begin, begin + window);
-  }
+  for (size_t w = 0; w < count; ++w) windows.emplace_back(num_keyframes * w / count, num_keyframes * (w + 1) / count);
   return windows;
 }
 
