@@ -52,5 +52,51 @@ TEST(BinaryIo, ChecksummedFileDetectsCorruptionAndTruncation) {
   EXPECT_THROW(ReadChecksummedFile(path, std::string_view("TESTFIL\0", 8)), InputError);
 }
 
+// A payload of several chunks, streamed: the same file as one written whole, and never whole in the writer.
+TEST(BinaryIo, StreamedChecksummedFileIsTheFileWrittenWhole) {
+  testing::TempDir dir;
+  const std::string_view magic("TESTFIL\0", 8);
+  BinaryWriter whole;
+  {
+    ChecksummedFileWriter streamed(dir / "streamed.bin", magic, 4);
+    size_t most_buffered = 0;
+    for (std::uint32_t i = 0; i < 700000; ++i) {  // 2.8 MB of values, then a string and a vector
+      whole.Put(i);
+      streamed.payload().Put(i);
+      most_buffered = std::max(most_buffered, streamed.payload().bytes().size());
+    }
+    whole.PutString("the end");
+    streamed.payload().PutString("the end");
+    whole.PutVector(std::vector<double>{1.5, -2.0});
+    streamed.payload().PutVector(std::vector<double>{1.5, -2.0});
+    EXPECT_LE(most_buffered, size_t{1} << 20) << "the writer held more than a chunk";
+    EXPECT_FALSE(std::filesystem::exists(dir / "streamed.bin")) << "nothing is in place before Commit()";
+    streamed.Commit();
+  }
+  WriteChecksummedFile(dir / "whole.bin", magic, 4, whole.bytes());
+  EXPECT_EQ(testing::ReadText(dir / "streamed.bin"), testing::ReadText(dir / "whole.bin"));
+  const ChecksummedFile read = ReadChecksummedFile(dir / "streamed.bin", magic);
+  EXPECT_EQ(read.version, 4u);
+  EXPECT_EQ(read.payload, whole.bytes());
+
+  // Dropped without Commit(): no file, no temporary left.
+  {
+    ChecksummedFileWriter dropped(dir / "dropped.bin", magic, 4);
+    dropped.payload().Put(1);
+  }
+  const auto entries = std::distance(std::filesystem::directory_iterator(dir.path()), {});
+  EXPECT_EQ(entries, 2) << "streamed.bin and whole.bin alone";
+}
+
+TEST(BinaryIo, ReadingADirectoryAsAChecksummedFileNamesIt) {
+  testing::TempDir dir;
+  try {
+    ReadChecksummedFile(dir.path(), std::string_view("TESTFIL\0", 8));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir.path().string()), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace semslam

@@ -93,6 +93,20 @@ class AtomicOutputFile::Buffer : public std::streambuf {
     return n;
   }
   int sync() override { return Drain() ? 0 : -1; }
+  // Seeking (a header filled in after its payload): what is buffered goes out first.
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    if (!(which & std::ios_base::out) || !Drain()) return pos_type(off_type(-1));
+    const int whence = dir == std::ios_base::beg ? SEEK_SET : dir == std::ios_base::cur ? SEEK_CUR : SEEK_END;
+    const off_t at = ::lseek(fd_, static_cast<off_t>(off), whence);
+    if (at < 0) {
+      if (error_ == 0) error_ = errno;
+      return pos_type(off_type(-1));
+    }
+    return pos_type(static_cast<off_type>(at));
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
 
  private:
   bool Drain() {

@@ -261,7 +261,8 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
 }
 
 void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFileContents& extra) {
-  BinaryWriter w;
+  ChecksummedFileWriter file(path, kMagic, kMapFileVersion);
+  BinaryWriter& w = file.payload();
   w.Put<std::uint32_t>(static_cast<std::uint32_t>(map.sessions().size()));
   for (const MapSession& session : map.sessions()) {
     w.PutString(session.name);
@@ -284,7 +285,7 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
     w.PutString(name);
     w.PutString(bytes);
   }
-  WriteChecksummedFile(path, kMagic, kMapFileVersion, w.bytes());
+  file.Commit();
 }
 
 MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
