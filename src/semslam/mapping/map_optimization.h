@@ -35,9 +35,9 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 
 // A global BA of bounded memory. The solver's working memory is about as large as the map itself, so a map of
 // more than `window_keyframes` keyframes is adjusted in a sweep of consecutive windows of its keyframes (by id,
-// that is along the drive), each with the points its keyframes observe. The keyframes of earlier windows that
-// observe those points hold still where those windows put them. A map within one window gets the plain global
-// BA.
+// that is along the drive), each with the points its keyframes observe, and the other keyframes observing them
+// held still (at the poses earlier windows gave them). It refines the map locally and keeps the shape the loop
+// correction gave it at large; a map within one window gets the plain global BA.
 struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
   int window_keyframes = 500;
