@@ -179,9 +179,10 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
       if (lock_map) lock = map.ReadLock();
       built = BuildWindowProblem(map, map_id, window, in_map, result);
     }
+    ++result.windows;
+    if (built.problem.observations.empty()) continue;  // its keyframes were culled meanwhile
     const BundleAdjustmentResult solved = BundleAdjust(built.problem, SolverOptions(options));
     KeepWindow(built, &result);
-    ++result.windows;
     if (solved.aborted) break;
   }
   result.aborted = options.abort != nullptr && options.abort->load();
