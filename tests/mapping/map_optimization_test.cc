@@ -1,5 +1,6 @@
-// The global bundle adjustment of a map in windows: bounded problems that still bring a disturbed map back to
-// the truth.
+// The global bundle adjustment of a map in windows: bounded problems that refine a disturbed map. Which
+// keyframes a window holds still is measured on the 10,000-frame soak (docs/results.md), where leaving the later
+// ones out drifted: this toy street, stereo and noiseless, cannot tell the two forms apart.
 
 #include <gtest/gtest.h>
 
