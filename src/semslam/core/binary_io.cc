@@ -45,9 +45,12 @@ std::string Header(std::string_view magic8, std::uint32_t version, std::uint64_t
 
 void WriteChecksummedFile(const std::filesystem::path& path, std::string_view magic8, std::uint32_t version,
                           std::string_view payload) {
-  ChecksummedFileWriter writer(path, magic8, version);
-  writer.payload().bytes().append(payload);
-  writer.Commit();
+  // Written whole, not through ChecksummedFileWriter, so that a test can hold either writer against the other.
+  const std::string header = Header(magic8, version, payload.size(), Fnv1a64(payload));
+  AtomicOutputFile file(path, std::ios::out | std::ios::binary);
+  file.stream().write(header.data(), static_cast<std::streamsize>(header.size()));
+  file.stream().write(payload.data(), static_cast<std::streamsize>(payload.size()));
+  file.Commit();
 }
 
 ChecksummedFileWriter::ChecksummedFileWriter(const std::filesystem::path& path, std::string_view magic8,

@@ -258,7 +258,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   {
     auto lock = map_.WriteLock();
     // Corrections before -> after per keyframe, propagated down the spanning tree.
-    std::unordered_map<const KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
+    std::unordered_map<KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
     for (const auto& [kf, camera_from_world] : adjusted.camera_from_world) {
       if (!kf->is_bad()) correction[kf] = {kf->camera_from_world(), camera_from_world};
     }
@@ -280,7 +280,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
         correction[child] = {child->camera_from_world(), child_from_parent * parent_after};
       }
     }
-    for (const auto& [kf, c] : correction) const_cast<KeyFrame*>(kf)->SetPose(c.second);
+    for (const auto& [kf, c] : correction) kf->SetPose(c.second);
     for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
       if (p->is_bad()) continue;
       const auto it = adjusted.positions.find(p);

@@ -102,32 +102,32 @@ struct WindowProblem {
   std::vector<KeyFrame*> keyframes;  // free, then fixed, as in the problem
   std::vector<MapPoint*> points;
   BundleAdjustmentProblem problem;
-  std::vector<ObservationRef> refs;
 };
 
-WindowProblem BuildWindowProblem(const Map& map, std::uint32_t map_id, const std::vector<KeyFrame*>& window,
+// Gathers the points from the window's keyframes, so that the cost of a window follows its size, not the map's.
+WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
                                  const std::unordered_set<const KeyFrame*>& in_map,
                                  const GlobalBundleAdjustmentResult& earlier) {
   WindowProblem built;
   std::unordered_set<const KeyFrame*> free;
+  std::set<MapPoint*, ById> points;  // by id: the same problem on every run
   for (KeyFrame* kf : window) {
     if (kf->is_bad()) continue;
     built.keyframes.push_back(kf);
     free.insert(kf);
+    for (MapPoint* p : kf->map_points()) {
+      if (p != nullptr && !p->is_bad() && p->observations().count(kf) > 0) points.insert(p);
+    }
   }
   std::set<KeyFrame*, ById> fixed;
-  for (MapPoint* p : map.MapPointsOfMap(map_id)) {
-    if (p->is_bad()) continue;
-    bool seen = false;
-    for (const auto& [kf, index] : p->observations()) seen = seen || free.count(kf) > 0;
-    if (!seen) continue;
-    built.points.push_back(p);
+  for (MapPoint* p : points) {
     for (const auto& [kf, index] : p->observations()) {
       if (!free.count(kf) && in_map.count(kf) && !kf->is_bad()) fixed.insert(kf);
     }
   }
+  built.points.assign(points.begin(), points.end());
   const std::vector<KeyFrame*> fixed_keyframes(fixed.begin(), fixed.end());
-  BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, &built.refs);
+  BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, /*refs=*/nullptr);
   built.keyframes.insert(built.keyframes.end(), fixed_keyframes.begin(), fixed_keyframes.end());
   for (size_t i = 0; i < built.keyframes.size(); ++i) {
     const auto it = earlier.camera_from_world.find(built.keyframes[i]);
@@ -177,7 +177,7 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
     {
       std::shared_lock<std::shared_mutex> lock;
       if (lock_map) lock = map.ReadLock();
-      built = BuildWindowProblem(map, map_id, window, in_map, result);
+      built = BuildWindowProblem(window, in_map, result);
     }
     ++result.windows;
     if (built.problem.observations.empty()) continue;  // its keyframes were culled meanwhile
@@ -191,13 +191,12 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
 
 void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result) {
   for (const auto& [kf, camera_from_world] : result.camera_from_world) {
-    if (!kf->is_bad()) const_cast<KeyFrame*>(kf)->SetPose(camera_from_world);
+    if (!kf->is_bad()) kf->SetPose(camera_from_world);
   }
   for (const auto& [p, position] : result.positions) {
     if (p->is_bad()) continue;
-    MapPoint* point = const_cast<MapPoint*>(p);
-    point->SetPosition(position);
-    point->UpdateNormalAndDepth();
+    p->SetPosition(position);
+    p->UpdateNormalAndDepth();
   }
 }
 
@@ -223,11 +222,11 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     return refinement;
   }
   // The plain BA first: the map keeps its result unless the refinement earns its five parameters.
-  WindowProblem whole = BuildWindowProblem(map, map_id, keyframes, {}, {});
+  WindowProblem whole = BuildWindowProblem(keyframes, {}, {});
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
   const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
-  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs, false);
+  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, {}, false);
   refinement.plain_cost = plain.final_capped_chi2;
   const bool monocular = std::none_of(problem.observations.begin(), problem.observations.end(),
                                       [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
@@ -251,7 +250,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
       refinement.reason = "the radial distortion came out above 0.2";
     } else {
       refinement.accepted = true;
-      ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, whole.refs, false);
+      ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, {}, false);
     }
   }
   ReleaseFreeMemory();

@@ -49,8 +49,8 @@ struct GlobalBundleAdjustmentOptions {
 
 // What a global BA found, not yet written into the map: the keyframes it moved and the points.
 struct GlobalBundleAdjustmentResult {
-  std::unordered_map<const KeyFrame*, Rigid3d> camera_from_world;
-  std::unordered_map<const MapPoint*, Eigen::Vector3d> positions;
+  std::unordered_map<KeyFrame*, Rigid3d> camera_from_world;
+  std::unordered_map<MapPoint*, Eigen::Vector3d> positions;
   int windows = 0;
   bool aborted = false;
 };
