@@ -271,6 +271,26 @@ TEST(BundleAdjust, PointsBehindTheCameraAreOutliersAndUnobservedPointsStay) {
   EXPECT_LT(MaxPoseError(s), 1e-4);
 }
 
+TEST(BundleAdjust, APointAtACameraCentreIsAnOutlierAndTheRestIsAdjusted) {
+  // A point a rounding error in front of camera 3 (seen on a real map: depth 7.7e-10). The check that keeps
+  // points behind the camera out of the problem let it in while the cost refused it, and every solve with it
+  // stopped at its first evaluation, leaving the whole problem as it was.
+  Scene s = MakeScene(5, 100, 2, false, 0.0, 0.0, 8);
+  s.problem.points.push_back(s.problem.camera_from_world[3].Inverse() * Eigen::Vector3d(0.0, 0.0, 5e-10));
+  BundleAdjustmentObservation o;
+  o.pose = 3;
+  o.point = static_cast<int>(s.problem.points.size()) - 1;
+  o.pixel = Eigen::Vector2d(620, 190);
+  s.problem.observations.push_back(o);
+  ASSERT_GT(MaxPoseError(s), 0.01);
+  BundleAdjustmentOptions options;
+  options.iterations = 30;
+  const BundleAdjustmentResult r = BundleAdjust(s.problem, options);
+  EXPECT_TRUE(r.outlier.back());
+  EXPECT_EQ(r.num_outliers, 1);
+  EXPECT_LT(MaxPoseError(s), 1e-4);
+}
+
 TEST(BundleAdjust, RejectsBadInput) {
   const Scene s = MakeScene(3, 30, 1, false, 0.0, 0.0, 9);
   BundleAdjustmentProblem p = s.problem;

@@ -75,7 +75,8 @@ class ReprojectionCost final : public ceres::SizedCostFunction<N, kRigidSize, 3>
     const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
     const Eigen::Map<const Eigen::Vector3d> x(parameters[1]);
     const Eigen::Vector3d p = q * x + t;
-    if (!(p.z() > 1e-9)) return false;  // a step that puts the point behind the camera is rejected
+    // A step that puts the point behind the camera is rejected.
+    if (!optim_internal::InFrontOfCamera(p)) return false;
     Residual<N>(k_, p, pixel_, right_u_, sqrt_info_, residuals);
     if (jacobians == nullptr) return true;
     const double iz = 1.0 / p.z();
@@ -113,7 +114,7 @@ class SelfCalibratingReprojectionCost final : public ceres::SizedCostFunction<2,
     const Eigen::Map<const Eigen::Vector3d> x(parameters[1]);
     const double* k = parameters[2];
     const Eigen::Vector3d p = q * x + t;
-    if (!(p.z() > 1e-9)) return false;
+    if (!optim_internal::InFrontOfCamera(p)) return false;
     const double iz = 1.0 / p.z();
     const double nx = p.x() * iz, ny = p.y() * iz;
     const double r2 = nx * nx + ny * ny;
@@ -173,7 +174,7 @@ double ObservationChi2(const BundleAdjustmentProblem& problem, const BundleAdjus
                        const PinholeCamera& camera) {
   const Eigen::Vector3d p =
       problem.camera_from_world[static_cast<size_t>(o.pose)] * problem.points[static_cast<size_t>(o.point)];
-  if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
+  if (!optim_internal::InFrontOfCamera(p)) return std::numeric_limits<double>::infinity();
   if (!camera.distortion.IsZero()) return (camera.Project(p) - o.pixel).squaredNorm() * o.inv_sigma2;
   const Intrinsics k{camera.fx, camera.fy, camera.cx, camera.cy, camera.fx * problem.baseline};
   double e[3] = {0, 0, 0};

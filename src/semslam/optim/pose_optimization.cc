@@ -93,7 +93,7 @@ int Classify(const std::vector<Measurement>& ms, const Eigen::Matrix3d& r, const
   for (size_t i = 0; i < ms.size(); ++i) {
     const Eigen::Vector3d p = r * ms[i].point + t;
     bool in = false;
-    if (p.z() > 0) {
+    if (optim_internal::InFrontOfCamera(p)) {
       const double e2 = WhitenedError(ms[i], p, k, e);
       in = e2 <= (ms[i].stereo ? options.chi2_stereo : options.chi2_mono);
     }
@@ -124,7 +124,7 @@ class PoseLm {
     for (size_t i = 0; i < ms_.size(); ++i) {
       if (!active_[i]) continue;
       const Eigen::Vector3d p = r * ms_[i].point + t;
-      if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
+      if (!optim_internal::InFrontOfCamera(p)) return std::numeric_limits<double>::infinity();
       const double e2 = WhitenedError(ms_[i], p, k_, e);
       cost += robust_ ? HuberCost(e2, ms_[i].stereo ? delta2_stereo_ : delta2_mono_) : e2;
     }
@@ -142,7 +142,7 @@ class PoseLm {
       if (!active_[i]) continue;
       const Measurement& m = ms_[i];
       const Eigen::Vector3d p = r * m.point + t;
-      if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
+      if (!optim_internal::InFrontOfCamera(p)) return std::numeric_limits<double>::infinity();
       const double e2 = WhitenedError(m, p, k_, e);
       double w = 1.0;
       if (robust_) {
@@ -269,7 +269,7 @@ class PoseCost final : public ceres::CostFunction {
     const Eigen::Map<const Eigen::Quaterniond> q(parameters[0]);
     const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
     const Eigen::Vector3d p = q * m_.point + t;
-    if (!(p.z() > 0)) return false;
+    if (!optim_internal::InFrontOfCamera(p)) return false;
     WhitenedError(m_, p, k_, residuals);
     if (jac != nullptr) {
       const double iz = 1.0 / p.z();
@@ -358,7 +358,8 @@ PoseOptimizationResult OptimizePose(const PoseOptimizationProblem& problem,
   // The first round starts from every observation in front of the camera.
   const Eigen::Matrix3d r0 = problem.camera_from_world.rotation.normalized().toRotationMatrix();
   for (size_t i = 0; i < n; ++i)
-    s.active[i] = (r0 * s.measurements[i].point + problem.camera_from_world.translation).z() > 0;
+    s.active[i] =
+        optim_internal::InFrontOfCamera(r0 * s.measurements[i].point + problem.camera_from_world.translation);
 
   result.camera_from_world = options.solver == PoseSolver::kCeres
                                  ? SolveCeres(problem.camera_from_world, k, options, s)

@@ -51,7 +51,7 @@ class Into1Cost final : public ceres::SizedCostFunction<2, kSim3Size> {
     const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
     const double s = std::exp(parameters[0][7]);
     const Eigen::Vector3d p = s * (q * point_) + t;
-    if (!(p.z() > 1e-9)) return false;
+    if (!optim_internal::InFrontOfCamera(p)) return false;
     ProjectionResidual(camera_, p, pixel_, sqrt_info_, residuals);
     if (jacobians != nullptr && jacobians[0] != nullptr) {
       const Eigen::Matrix<double, 2, 3> a =
@@ -84,7 +84,7 @@ class Into2Cost final : public ceres::SizedCostFunction<2, kSim3Size> {
     const Eigen::Map<const Eigen::Vector3d> t(parameters[0] + 4);
     const double inv_s = std::exp(-parameters[0][7]);
     const Eigen::Vector3d p = inv_s * (q.conjugate() * (point_ - t));
-    if (!(p.z() > 1e-9)) return false;
+    if (!optim_internal::InFrontOfCamera(p)) return false;
     ProjectionResidual(camera_, p, pixel_, sqrt_info_, residuals);
     if (jacobians != nullptr && jacobians[0] != nullptr) {
       const Eigen::Matrix<double, 2, 3> a = ProjectionJacobian(camera_, p, sqrt_info_);
@@ -109,7 +109,7 @@ bool MatchChi2(const Sim3RefinementProblem& problem, const Sim3Match& m, const S
                double* chi2_2) {
   const Eigen::Vector3d p1 = s * m.point2;
   const Eigen::Vector3d p2 = s.Inverse() * m.point1;
-  if (!(p1.z() > 0) || !(p2.z() > 0)) return false;
+  if (!optim_internal::InFrontOfCamera(p1) || !optim_internal::InFrontOfCamera(p2)) return false;
   double e[2];
   ProjectionResidual(problem.camera1, p1, m.pixel1, std::sqrt(m.inv_sigma2_1), e);
   *chi2_1 = e[0] * e[0] + e[1] * e[1];
