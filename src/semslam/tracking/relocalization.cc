@@ -12,77 +12,145 @@
 
 namespace semslam {
 
+namespace {
+
+constexpr int kMinInliers = 50;
+// Near the motion model's prediction fewer do: the tracker then asks 50 of the whole local map
+// (Tracker::TrackLocalMap), which a place that only looks the same does not give.
+constexpr int kMinInliersNearPrediction = 30;
+
+// Clears the matches pose optimization rejected; returns those left.
+void DropOutliers(Frame& frame) {
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.outliers[i]) {
+      frame.map_points[i] = nullptr;
+      frame.outliers[i] = false;
+    }
+  }
+}
+
+// A pose for `frame` from its matches to map points (`matches`, one slot per keypoint): PnP RANSAC, pose
+// refinement, then a guided search in the points of `keyframes` (the first is the frame's reference) for more
+// matches. Accepted with min_inliers inliers that options.plausible accepts; the frame then has its pose and
+// matches.
+bool PoseFromMatches(Frame& frame, const std::vector<MapPoint*>& matches,
+                     const std::vector<KeyFrame*>& keyframes, int min_inliers,
+                     const std::function<int(Frame&)>& optimize_pose, const RelocalizationOptions& options) {
+  KeyFrame& keyframe = *keyframes.front();
+  const auto& camera = frame.data().camera;
+  Points3d world_points, bearings;
+  std::vector<size_t> slots;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] == nullptr || matches[i]->is_bad() || (options.exclude_dynamic && matches[i]->IsDynamic()))
+      continue;
+    world_points.push_back(matches[i]->position());
+    bearings.push_back(camera.Unproject(frame.features().keypoints[i].pixel.cast<double>()));
+    slots.push_back(i);
+  }
+  PnpRansacOptions pnp_options;
+  pnp_options.max_reprojection_error_px = 2.0 * std::sqrt(5.991);
+  pnp_options.focal_length = camera.fx;
+  pnp_options.seed = frame.id() ^ keyframe.id();
+  const auto pnp = SolvePnpRansac(world_points, bearings, pnp_options);
+  if (!pnp || pnp->num_inliers < 10) return false;
+
+  frame.SetPose(pnp->camera_from_world);
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  for (size_t k = 0; k < slots.size(); ++k) {
+    if (pnp->inliers[k]) frame.map_points[slots[k]] = matches[slots[k]];
+  }
+  int good = optimize_pose(frame);
+  if (good < 10) return false;
+  DropOutliers(frame);
+  auto found = [&frame] {
+    std::set<MapPoint*> points;
+    for (MapPoint* p : frame.map_points) {
+      if (p != nullptr) points.insert(p);
+    }
+    return points;
+  };
+  auto search = [&](float radius, int max_distance) {
+    int more = 0;
+    for (KeyFrame* kf : keyframes) more += SearchFromKeyFrame(frame, *kf, found(), radius, max_distance);
+    return more;
+  };
+  if (good < min_inliers) {
+    // A guided search in the keyframes' map points for more matches, then again with a tighter window.
+    const int more = search(10.0f, 100);
+    if (good + more >= min_inliers) {
+      good = optimize_pose(frame);
+      if (good > 30 && good < min_inliers) {
+        DropOutliers(frame);
+        const int extra = search(3.0f, 64);
+        if (good + extra >= min_inliers) good = optimize_pose(frame);
+      }
+      DropOutliers(frame);
+    }
+  }
+  if (good < min_inliers || (options.plausible && !options.plausible(frame))) return false;
+  frame.reference_keyframe = &keyframe;
+  return true;
+}
+
+// The nearby keyframes' points, searched where the predicted pose projects them (a wide window: the
+// prediction of a lost moment is off by metres along the road); then PnP on those matches.
+bool RelocalizeFromPrediction(Frame& frame, const std::vector<KeyFrame*>& nearby, const Rigid3d& predicted,
+                              const std::function<int(Frame&)>& optimize_pose,
+                              const RelocalizationOptions& options) {
+  constexpr float kRadiusPx = 40.0f;  // at the finest level
+  constexpr int kMinMatches = 20;
+  frame.SetPose(predicted);
+  std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
+  std::fill(frame.outliers.begin(), frame.outliers.end(), false);
+  std::set<MapPoint*> found;
+  KeyFrame* best = nullptr;
+  int best_matches = 0;
+  for (KeyFrame* kf : nearby) {
+    const int matches = SearchFromKeyFrame(frame, *kf, found, kRadiusPx, 100);
+    if (matches > best_matches) {
+      best_matches = matches;
+      best = kf;
+    }
+    for (MapPoint* p : frame.map_points) {
+      if (p != nullptr) found.insert(p);
+    }
+  }
+  if (best == nullptr || static_cast<int>(found.size()) < kMinMatches) return false;
+  const std::vector<MapPoint*> matches = frame.map_points;
+  std::vector<KeyFrame*> keyframes = {best};
+  for (KeyFrame* kf : nearby) {
+    if (kf != best) keyframes.push_back(kf);
+  }
+  return PoseFromMatches(frame, matches, keyframes, kMinInliersNearPrediction, optimize_pose, options);
+}
+
+}  // namespace
+
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
                      const std::function<int(Frame&)>& optimize_pose, const RelocalizationOptions& options) {
+  std::vector<KeyFrame*> nearby;
+  std::set<const KeyFrame*> tried;
+  for (KeyFrame* kf : options.nearby) {
+    if (kf != nullptr && !kf->is_bad() && (!options.map_id || kf->map_id() == *options.map_id) &&
+        tried.insert(kf).second) {
+      nearby.push_back(kf);
+    }
+  }
+  if (options.predicted && !nearby.empty() &&
+      RelocalizeFromPrediction(frame, nearby, *options.predicted, optimize_pose, options)) {
+    return true;
+  }
   PlaceCandidateOptions candidate_options;
   candidate_options.map_id = options.map_id;
-  const std::vector<KeyFrame*> candidates = FindPlaceCandidates(frame.bow, database, map, candidate_options);
-  const bool exclude_dynamic = options.exclude_dynamic;
-  const auto& camera = frame.data().camera;
+  std::vector<KeyFrame*> candidates = nearby;
+  for (KeyFrame* kf : FindPlaceCandidates(frame.bow, database, map, candidate_options)) {
+    if (tried.insert(kf).second) candidates.push_back(kf);
+  }
   for (KeyFrame* kf : candidates) {
     std::vector<MapPoint*> matches;
     if (SearchByBow(*kf, frame, matches, 0.75f) < 15) continue;
-
-    Points3d world_points, bearings;
-    std::vector<size_t> slots;
-    for (size_t i = 0; i < matches.size(); ++i) {
-      if (matches[i] == nullptr || matches[i]->is_bad() || (exclude_dynamic && matches[i]->IsDynamic()))
-        continue;
-      world_points.push_back(matches[i]->position());
-      bearings.push_back(camera.Unproject(frame.features().keypoints[i].pixel.cast<double>()));
-      slots.push_back(i);
-    }
-    PnpRansacOptions pnp_options;
-    pnp_options.max_reprojection_error_px = 2.0 * std::sqrt(5.991);
-    pnp_options.focal_length = camera.fx;
-    pnp_options.seed = frame.id() ^ kf->id();
-    const auto pnp = SolvePnpRansac(world_points, bearings, pnp_options);
-    if (!pnp || pnp->num_inliers < 10) continue;
-
-    frame.SetPose(pnp->camera_from_world);
-    std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-    std::fill(frame.outliers.begin(), frame.outliers.end(), false);
-    for (size_t k = 0; k < slots.size(); ++k) {
-      if (pnp->inliers[k]) frame.map_points[slots[k]] = matches[slots[k]];
-    }
-    int good = optimize_pose(frame);
-    if (good < 10) continue;
-    std::set<MapPoint*> found;
-    for (size_t i = 0; i < frame.map_points.size(); ++i) {
-      if (frame.outliers[i]) {
-        frame.map_points[i] = nullptr;
-        frame.outliers[i] = false;
-      } else if (frame.map_points[i] != nullptr) {
-        found.insert(frame.map_points[i]);
-      }
-    }
-    if (good < 50) {
-      // A guided search in the candidate's map points for more matches, then again with a tighter window.
-      const int more = SearchFromKeyFrame(frame, *kf, found, 10.0f, 100);
-      if (good + more >= 50) {
-        good = optimize_pose(frame);
-        if (good > 30 && good < 50) {
-          found.clear();
-          for (size_t i = 0; i < frame.map_points.size(); ++i) {
-            if (frame.map_points[i] != nullptr && !frame.outliers[i]) found.insert(frame.map_points[i]);
-          }
-          const int extra = SearchFromKeyFrame(frame, *kf, found, 3.0f, 64);
-          if (good + extra >= 50) {
-            good = optimize_pose(frame);
-          }
-        }
-        for (size_t i = 0; i < frame.map_points.size(); ++i) {
-          if (frame.outliers[i]) {
-            frame.map_points[i] = nullptr;
-            frame.outliers[i] = false;
-          }
-        }
-      }
-    }
-    if (good >= 50 && (!options.plausible || options.plausible(frame))) {
-      frame.reference_keyframe = kf;
-      return true;
-    }
+    if (PoseFromMatches(frame, matches, {kf}, kMinInliers, optimize_pose, options)) return true;
   }
   return false;
 }

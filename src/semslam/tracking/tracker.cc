@@ -121,6 +121,22 @@ void Tracker::Reset() {
   init_between_frames_.clear();
   last_tracked_reference_ = nullptr;
   last_velocity_.reset();
+  const bool lost_map_kept = lost_map_ && [&] {
+    auto lock = map_.ReadLock();
+    return !lost_map_->reference->is_bad();
+  }();
+  if (lost_map_kept) {
+    // The map given up was the one started after a loss: the lost map is searched again first, from where
+    // it was left.
+    last_tracked_reference_ = lost_map_->reference;
+    last_tracked_camera_from_reference_ = lost_map_->camera_from_reference;
+    last_velocity_ = lost_map_->velocity;
+    last_tracked_time_ = lost_map_->time;
+    last_step_seconds_ = lost_map_->step_seconds;
+    frames_since_tracked_ = static_cast<int>(records_.size() - 1 - lost_map_->record_index);
+  } else {
+    lost_map_.reset();
+  }
 }
 
 std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
@@ -175,67 +191,33 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
               ExtractFeatures(left, options_.monocular ? cv::Mat() : right, mask, mono_init));
   TrackingResult result;
 
-  if (state_ == TrackingState::kNotInitialized) {
-    const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
-    if (ok) {
+  // A map lost for good whose successor has not started: relocalization there comes before a new map.
+  const bool recovering = state_ == TrackingState::kNotInitialized && lost_map_.has_value();
+  if (state_ == TrackingState::kNotInitialized && !recovering) {
+    if (InitializeMap(frame)) {
+      state_ = TrackingState::kOk;
+      result.initialized_now = true;
+    }
+  } else if (TrackInMap(frame, result)) {
+    state_ = TrackingState::kOk;
+    lost_since_.reset();
+    if (recovering) {
+      auto lock = map_.ReadLock();
+      spdlog::info("frame {}: map {} found again after {:.1f} s; no new map needed", frame.id(),
+                   reference_keyframe_->map_id(), timestamp - lost_map_->time);
+      lost_map_.reset();
+    }
+  } else if (recovering) {
+    if (InitializeMap(frame)) {
       state_ = TrackingState::kOk;
       result.initialized_now = true;
     }
   } else {
-    auto lock = map_.ReadLock();
-    if (last_frame_) ReplaceMergedPoints(*last_frame_);
-    bool ok = false;
-    if (state_ == TrackingState::kOk) {
-      const bool map_changed = map_.big_change_index() != last_big_change_;
-      if (map_changed) {
-        last_big_change_ = map_.big_change_index();
-        // A loop correction or global BA moved the map under the last frame: it follows its reference
-        // keyframe, or the search below would start metres off (3.5 m errors at a corner of the city).
-        const auto corrected = records_.empty() ? std::nullopt : CurrentCameraFromWorld(records_.back());
-        if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
-      }
-      if (!velocity_ || map_changed || frame.id() < last_relocalization_frame_ + 2) {
-        ok = TrackReferenceKeyFrame(frame) > 0;
-      } else {
-        ok = TrackWithMotionModelOrReference(frame);
-      }
-    } else {
-      ok = Relocalize(frame);
-      result.relocalized = ok;
-      if (ok && reference_keyframe_->map_id() != map_.active_map_id()) {
-        // Relocalized in another map of a loaded atlas: tracking and mapping go on in that one.
-        lock.unlock();
-        {
-          auto write = map_.WriteLock();
-          map_.ActivateMap(reference_keyframe_->map_id());
-        }
-        lock.lock();
-      }
-    }
-    if (ok) ok = TrackLocalMap(frame);
-    state_ = ok ? TrackingState::kOk : TrackingState::kLost;
-    if (ok) {
-      if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
-      tracked_camera_from_reference_ = frame.camera_from_world() * frame.reference_keyframe->world_from_camera();
-      lost_since_.reset();
-      velocity_ = last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr
-                      ? std::optional<Rigid3d>(frame.camera_from_world() * last_frame_->world_from_camera())
-                      : std::nullopt;
-      if (NeedNewKeyFrame(frame)) {
-        lock.unlock();
-        CreateNewKeyFrame(frame);
-        result.new_keyframe = true;
-      }
-      // Outliers are not carried to the next frame's motion-model search.
-      for (size_t i = 0; i < frame.map_points.size(); ++i) {
-        if (frame.outliers[i]) frame.map_points[i] = nullptr;
-      }
-    } else {
-      velocity_.reset();
-      if (!lost_since_) {
-        lost_since_ = timestamp;
-        spdlog::info("frame {}: tracking lost", frame.id());
-      }
+    state_ = TrackingState::kLost;
+    velocity_.reset();
+    if (!lost_since_) {
+      lost_since_ = timestamp;
+      spdlog::info("frame {}: tracking lost", frame.id());
     }
   }
 
@@ -285,6 +267,62 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   result.milliseconds = watch.ElapsedMs();
   timing_.Add("tracking", result.milliseconds);
   return result;
+}
+
+bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
+  auto lock = map_.ReadLock();
+  if (last_frame_) ReplaceMergedPoints(*last_frame_);
+  bool ok = false;
+  if (state_ == TrackingState::kOk) {
+    const bool map_changed = map_.big_change_index() != last_big_change_;
+    if (map_changed) {
+      last_big_change_ = map_.big_change_index();
+      // A loop correction or global BA moved the map under the last frame: it follows its reference
+      // keyframe, or the search below would start metres off (3.5 m errors at a corner of the city).
+      const auto corrected = records_.empty() ? std::nullopt : CurrentCameraFromWorld(records_.back());
+      if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
+    }
+    // Right after a relocalization the motion is unknown, unless it was a recovery (the motion from before
+    // the loss goes on).
+    const bool just_relocalized =
+        frame.id() < last_relocalization_frame_ + 2 && !last_relocalization_recovered_;
+    if (!velocity_ || map_changed || just_relocalized) {
+      ok = TrackReferenceKeyFrame(frame) > 0;
+    } else {
+      ok = TrackWithMotionModelOrReference(frame);
+    }
+  } else {
+    ok = Relocalize(frame);
+  }
+  if (!ok || !TrackLocalMap(frame)) return false;
+  result.relocalized = state_ != TrackingState::kOk;  // confirmed by the local map
+  if (reference_keyframe_->map_id() != map_.active_map_id()) {
+    // Relocalized in another map (of a loaded atlas, or the one lost before the active one started):
+    // tracking and mapping go on in that one.
+    lock.unlock();
+    {
+      auto write = map_.WriteLock();
+      map_.ActivateMap(reference_keyframe_->map_id());
+    }
+    lock.lock();
+  }
+  if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
+  tracked_camera_from_reference_ = frame.camera_from_world() * frame.reference_keyframe->world_from_camera();
+  if (last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr) {
+    velocity_ = frame.camera_from_world() * last_frame_->world_from_camera();
+  } else if (!result.relocalized || !last_relocalization_recovered_) {
+    velocity_.reset();  // a recovered frame keeps the motion from before the loss (Relocalize)
+  }
+  if (NeedNewKeyFrame(frame)) {
+    lock.unlock();
+    CreateNewKeyFrame(frame);
+    result.new_keyframe = true;
+  }
+  // Outliers are not carried to the next frame's motion-model search.
+  for (size_t i = 0; i < frame.map_points.size(); ++i) {
+    if (frame.outliers[i]) frame.map_points[i] = nullptr;
+  }
+  return true;
 }
 
 void Tracker::FollowMapChange(Frame& frame) const {
@@ -409,13 +447,14 @@ bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
   std::vector<MapPoint*> predicted_points = frame.map_points;
   const int unpredicted = TrackReferenceKeyFrame(frame);
   if (unpredicted > predicted) {
-    spdlog::info("frame {}: the motion model kept {} of the last frame's {} points; matched to the reference "
-                 "keyframe without prediction: {} inliers, that pose is kept",
-                 frame.id(), predicted, last_points, unpredicted);
+    spdlog::info(
+        "frame {}: the motion model kept {} of the last frame's {} points; matched to the reference "
+        "keyframe without prediction: {} inliers, that pose is kept",
+        frame.id(), predicted, last_points, unpredicted);
     return true;
   }
-  // Both searches leave no outlier flags (DiscardOutliers clears them), so the motion model's matches go back as
-  // they were.
+  // Both searches leave no outlier flags (DiscardOutliers clears them), so the motion model's matches go back
+  // as they were.
   frame.SetPose(predicted_pose);
   frame.map_points = std::move(predicted_points);
   return true;
@@ -538,12 +577,14 @@ bool Tracker::TrackLocalMap(Frame& frame) {
       frame.map_points[i] = nullptr;
     }
   }
-  if (frame.id() <
-          last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes) &&
-      inliers_ < 50) {
-    return false;
-  }
-  return inliers_ >= 30;
+  // Right after a relocalization the local map must confirm it, more firmly than tracking needs, unless it
+  // was a recovery near the prediction (see last_relocalization_recovered_).
+  constexpr int kTracked = 30, kRelocalized = 50, kRecovered = 20;
+  const bool after_relocalization =
+      frame.id() <
+      last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
+  if (!after_relocalization) return inliers_ >= kTracked;
+  return inliers_ >= (last_relocalization_recovered_ ? kRecovered : kRelocalized);
 }
 
 }  // namespace semslam

@@ -53,8 +53,10 @@ struct TrackerOptions {
   double init_min_parallax_deg = 2.0;
   int init_parallax_rank = 50;
   int init_min_points = 100;  // well-triangulated points needed
-  // Lost for this long (seconds) without relocalizing in the active map: a new map starts and the old one
+  // Lost for this long (seconds) without relocalizing in the active map: a new map may start and the old one
   // is kept, to be merged when its places are seen again. Monocular re-initializes; stereo starts at once.
+  // Until the new map has started, every frame tries relocalization in the lost map first: after a short
+  // black-out the camera usually still sees what it saw last, and a map found again needs no merge.
   double relocalization_timeout_s = 1.0;
   // A map lost with at most this many keyframes is given up (discarded) instead of kept.
   int min_keyframes_to_keep_map = 6;
@@ -146,6 +148,10 @@ class Tracker {
   std::shared_ptr<const FrameData> ExtractFeatures(const cv::Mat& left, const cv::Mat& right,
                                                    const cv::Mat& mask, bool initialization);
   bool InitializeMonocular(Frame& frame);
+  // Tracks a frame in the map it was tracked in last (motion model or reference keyframe), or relocalizes it,
+  // then against the local map; on success the map found is the active one and a keyframe is made when one
+  // is due.
+  bool TrackInMap(Frame& frame, TrackingResult& result);
   bool InitializeStereo(Frame& frame);
   // Inliers matched to the reference keyframe by bag of words, from the last frame's pose; 0 when it fails.
   int TrackReferenceKeyFrame(Frame& frame);
@@ -155,12 +161,15 @@ class Tracker {
   bool TrackWithMotionModelOrReference(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);
-  // Lost for good: starts a new map (stereo initializes it from `frame` at once).
+  // Lost for good: a new map is made active (stereo initializes it from `frame` at once); until it starts,
+  // frames are relocalized in the lost map first.
   void StartNewMap(Frame& frame, TrackingResult& result);
+  // A map initialized from `frame` (monocular: with an earlier one); counts the maps started after a loss.
+  bool InitializeMap(Frame& frame);
   // The record of a frame without a tracked pose: the motion model's prediction, when there is one.
   void PredictPose(FrameRecord& record) const;
-  // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking lock
-  // was released: the frame follows its reference keyframe. Call under a map lock.
+  // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking
+  // lock was released: the frame follows its reference keyframe. Call under a map lock.
   void FollowMapChange(Frame& frame) const;
   // Back to "not initialized" in the active map: no last frame, motion, keyframes or local map. The last
   // tracked pose stays (lost frames are still predicted from it) unless Reset() drops it too.
@@ -196,10 +205,15 @@ class Tracker {
   std::unique_ptr<Frame> last_frame_;
   std::optional<Rigid3d> velocity_;  // current_from_last of the previous step
   int last_big_change_ = 0;
-  // The current frame's pose relative to its reference keyframe, taken under the lock it was tracked (or made a
-  // keyframe) under: what the frame keeps when the map moves before its pose is recorded. Reset by each Track().
+  // The current frame's pose relative to its reference keyframe, taken under the lock it was tracked (or made
+  // a keyframe) under: what the frame keeps when the map moves before its pose is recorded. Reset by each
+  // Track().
   std::optional<Rigid3d> tracked_camera_from_reference_;
   std::uint64_t last_relocalization_frame_ = 0;
+  // The last relocalization was a recovery: within reach of the motion model's prediction after a short
+  // loss. The local map then confirms it with fewer inliers, and keyframes need not wait: right after a gap a
+  // monocular map holds few points the camera still sees, and only a keyframe adds more.
+  bool last_relocalization_recovered_ = false;
   KeyFrame* last_keyframe_ = nullptr;
   KeyFrame* reference_keyframe_ = nullptr;
   std::vector<KeyFrame*> local_keyframes_;
@@ -217,6 +231,17 @@ class Tracker {
   double last_tracked_time_ = 0.0;
   double last_step_seconds_ = 0.0;  // between the last two tracked frames: the time last_velocity_ covers
   int frames_since_tracked_ = 0;
+  // Where tracking was in the map lost for good, while the map after it has not started (or was given up
+  // young): relocalization there comes first. `record_index` is the last tracked frame's record.
+  struct LostMap {
+    KeyFrame* reference = nullptr;
+    Rigid3d camera_from_reference;
+    std::optional<Rigid3d> velocity;
+    double time = 0.0;
+    double step_seconds = 0.0;
+    size_t record_index = 0;
+  };
+  std::optional<LostMap> lost_map_;
 
   // Monocular initialization state: the first frame, where its features were seen last, and the frames
   // since (posed once the map starts).

@@ -12,7 +12,10 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   if (mapper_->IsStopped() || mapper_->StopRequested()) return false;
   const size_t num_keyframes = map_.NumKeyFramesOfMap(map_.active_map_id());
   const auto max_frames = static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
-  if (frame.id() < last_relocalization_frame_ + max_frames && num_keyframes > max_frames) return false;
+  if (frame.id() < last_relocalization_frame_ + max_frames && num_keyframes > max_frames &&
+      !last_relocalization_recovered_) {
+    return false;
+  }
   const int min_observations = num_keyframes <= 2 ? 2 : 3;
   const int reference_matches = reference_keyframe_->CountTrackedPoints(min_observations);
 

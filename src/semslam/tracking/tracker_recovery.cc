@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "semslam/tracking/relocalization.h"
 #include "semslam/tracking/tracker.h"
@@ -16,22 +17,47 @@ void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
     old_map = map_.active_map_id();
     new_map = map_.StartNewMap();
   }
-  spdlog::warn("frame {}: lost for {:.1f} s without relocalizing; map {} is kept and map {} starts",
-               frame.id(), frame.timestamp() - lost_since_.value_or(frame.timestamp()), old_map, new_map);
-  ++num_new_maps_;
+  if (last_tracked_reference_ != nullptr) {
+    lost_map_ =
+        LostMap{last_tracked_reference_, last_tracked_camera_from_reference_,
+                last_velocity_,          last_tracked_time_,
+                last_step_seconds_,      records_.size() - 1 - static_cast<size_t>(frames_since_tracked_)};
+  }
+  spdlog::warn(
+      "frame {}: lost for {:.1f} s without relocalizing; map {} is kept and map {} starts (until it "
+      "does, map {} is searched first)",
+      frame.id(), frame.timestamp() - lost_since_.value_or(frame.timestamp()), old_map, new_map, old_map);
   result.new_map = true;
   ForgetTrackingState();
-  if (!options_.monocular && InitializeStereo(frame)) {
+  if (!options_.monocular && InitializeMap(frame)) {
     state_ = TrackingState::kOk;
     result.initialized_now = true;
   }
 }
 
+bool Tracker::InitializeMap(Frame& frame) {
+  const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
+  if (ok && lost_map_) {
+    ++num_new_maps_;
+    auto lock = map_.ReadLock();
+    spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
+                 frame.id(), map_.active_map_id(), lost_map_->reference->map_id());
+  }
+  return ok;
+}
+
 void Tracker::PredictPose(FrameRecord& record) const {
+  // Beyond this many steps (10 s at 10 Hz) the prediction is held where it is.
+  constexpr int kMaxPredictedSteps = 100;
   if (last_tracked_reference_ == nullptr) return;
   Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
   if (last_velocity_) {
-    for (int k = 0; k < frames_since_tracked_; ++k)
+    // Steps of the last motion by the clock (dropped frames leave a gap in time), or by frames.
+    const int steps =
+        last_step_seconds_ > 0.0 && record.timestamp > last_tracked_time_
+            ? static_cast<int>(std::lround((record.timestamp - last_tracked_time_) / last_step_seconds_))
+            : frames_since_tracked_;
+    for (int k = 0; k < std::min(steps, kMaxPredictedSteps); ++k)
       camera_from_reference = *last_velocity_ * camera_from_reference;
   }
   record.reference = last_tracked_reference_;
@@ -40,6 +66,8 @@ void Tracker::PredictPose(FrameRecord& record) const {
 }
 
 bool Tracker::Relocalize(Frame& frame) {
+  // The last reference keyframe's best covisibles are tried first: where the camera was a moment ago.
+  constexpr size_t kNearbyKeyFrames = 10;
   ScopedTimer timer(timing_, "relocalization");
   ComputeBow(frame);
   RelocalizationOptions relocalization;
@@ -55,17 +83,21 @@ bool Tracker::Relocalize(Frame& frame) {
   }
   if (last_reference != nullptr) {
     relocalization.map_id = last_reference->map_id();
+    relocalization.nearby = last_reference->BestCovisibles(kNearbyKeyFrames);
+    relocalization.nearby.insert(relocalization.nearby.begin(), map_.KeyFrameById(last_reference->id()));
     FrameRecord predicted;
+    predicted.timestamp = frame.timestamp();
     PredictPose(predicted);
     const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(predicted);
+    relocalization.predicted = camera_from_world;
     if (camera_from_world) {
       const Eigen::Vector3d center = camera_from_world->Inverse().translation;
       const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
       // Three times the distance the last motion would cover in the time since the last tracked frame (by the
       // clock, not by frames: dropped frames leave a gap in time), and never less than half the scene depth.
-      const double steps_since_tracked =
-          last_step_seconds_ > 0.0 ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
-                                   : static_cast<double>(frames_since_tracked_ + 1);
+      const double steps_since_tracked = last_step_seconds_ > 0.0
+                                             ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
+                                             : static_cast<double>(frames_since_tracked_ + 1);
       const double radius = std::max(3.0 * step * std::max(1.0, steps_since_tracked),
                                      0.5 * last_reference->SceneDepthQuantile(2));
       relocalization.plausible = [center, radius, id = frame.id()](const Frame& f) {
@@ -81,7 +113,8 @@ bool Tracker::Relocalize(Frame& frame) {
       frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); }, relocalization);
   if (!ok) return false;
   last_relocalization_frame_ = frame.id();
-  velocity_.reset();
+  last_relocalization_recovered_ = relocalization.predicted.has_value();
+  velocity_ = last_relocalization_recovered_ ? last_velocity_ : std::nullopt;
   // The reference keyframe is chosen by the local map step that follows.
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* p = frame.map_points[i];
