@@ -19,6 +19,14 @@
 
 namespace semslam {
 
+namespace {
+
+// A gap link's prediction is rough (the motion of before a loss carried over it): its information is this
+// share of a covisibility edge's.
+constexpr double kGapLinkWeight = 0.1;
+
+}  // namespace
+
 double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
   // current_from_world_ is the current keyframe's pose in the matched map's frame: the same transform takes
   // every pose and point of its map there (with the scale between the two, monocular).
@@ -44,8 +52,9 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   spdlog::info(
       "{} detected: keyframe {} (map {}, t {:.1f} s) matches keyframe {} (map {}, t {:.1f} s), {} matches, "
       "confirmed by {} neighbours",
-      merge ? "map merge" : "loop", current->id(), current->map_id(), current->timestamp(), matched_keyframe_->id(),
-      matched_keyframe_->map_id(), matched_keyframe_->timestamp(), last_matches_, last_verified_);
+      merge ? "map merge" : "loop", current->id(), current->map_id(), current->timestamp(),
+      matched_keyframe_->id(), matched_keyframe_->map_id(), matched_keyframe_->timestamp(), last_matches_,
+      last_verified_);
   mapper_.RequestStop();
   StopGlobalBundleAdjustment();
   while (!mapper_.IsStopped() && !mapper_.IsFinished())
@@ -72,7 +81,8 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
     std::vector<KeyFrame*> connected = current->Covisibles();
     connected.push_back(current);
     const Rigid3d world_from_current = current->world_from_camera();
-    const LoopCorrectionSize correction = MeasureCorrection(current->camera_from_world(), current_from_world_);
+    const LoopCorrectionSize correction =
+        MeasureCorrection(current->camera_from_world(), current_from_world_);
     event.correction_m = correction.metres;
     event.correction_deg = correction.degrees;
 
@@ -203,6 +213,16 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     for (KeyFrame* other : kf->loop_edges()) add_edge(kf, other, false);
     for (KeyFrame* other : kf->CovisiblesWithWeightAtLeast(kMinWeight)) add_edge(kf, other, false);
   }
+  // Gap links (map/map.h): the only tie between the two sides of a loss once their maps are merged. Without
+  // it the younger map hangs from the one place the merge saw, and a degree off there swings its far end by
+  // metres (a 2 s black-out after which a monocular town drive ended 25 m off).
+  for (const GapLink& link : map_.gap_links()) {
+    const std::optional<GapEdge> edge = ResolveGapLink(link);
+    if (!edge) continue;
+    const auto ia = node.find(edge->before), ib = node.find(edge->after);
+    if (ia == node.end() || ib == node.end()) continue;
+    graph.AddRelativeEdge(ia->second, ib->second, Sim3d(edge->before_from_after), kGapLinkWeight);
+  }
   PoseGraphOptions options;
   options.fix_scale = options_.fix_scale;
   options.max_iterations = 20;
@@ -299,7 +319,8 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   ReleaseFreeMemory();  // the solver's working memory is several times the map's
   ++num_global_ba_;
   global_ba_running_ = false;
-  spdlog::info("global bundle adjustment done ({} window{})", adjusted.windows, adjusted.windows == 1 ? "" : "s");
+  spdlog::info("global bundle adjustment done ({} window{})", adjusted.windows,
+               adjusted.windows == 1 ? "" : "s");
 }
 
 }  // namespace semslam

@@ -39,16 +39,40 @@ bool Tracker::InitializeMap(Frame& frame) {
   const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
   if (ok && lost_map_) {
     ++num_new_maps_;
-    auto lock = map_.ReadLock();
-    spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
-                 frame.id(), map_.active_map_id(), lost_map_->reference->map_id());
+    LinkNewMapToLostMap(frame);
   }
   return ok;
 }
 
+void Tracker::LinkNewMapToLostMap(const Frame& frame) {
+  auto lock = map_.WriteLock();
+  KeyFrame* after = new_keyframes_.empty() ? nullptr : map_.KeyFrameById(new_keyframes_.front().keyframe_id);
+  FrameRecord last;
+  last.reference = lost_map_->reference;
+  last.camera_from_reference = lost_map_->camera_from_reference;
+  const KeyFrame* before = CurrentReference(last);
+  spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
+               frame.id(), map_.active_map_id(),
+               before != nullptr ? before->map_id() : lost_map_->reference->map_id());
+  if (after == nullptr || before == nullptr || !lost_map_->velocity || !(lost_map_->step_seconds > 0.0))
+    return;
+  // Where the motion before the loss puts the new map's first keyframe, relative to the last keyframe
+  // tracked.
+  const double seconds = after->timestamp() - lost_map_->time;
+  const long steps = std::lround(seconds / lost_map_->step_seconds);
+  Rigid3d after_from_before = *CurrentCameraFromWorld(last) * before->world_from_camera();
+  for (long k = 0; k < std::min<long>(steps, kMaxPredictedSteps); ++k) {
+    after_from_before = *lost_map_->velocity * after_from_before;
+  }
+  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before, seconds});
+  spdlog::info(
+      "map {}'s first keyframe (frame {}) is linked to keyframe {} (frame {}) of map {} by the motion before "
+      "the loss over {:.1f} s: {:.2f} apart, turned {:.1f} deg",
+      after->map_id(), after->frame_id(), before->id(), before->frame_id(), before->map_id(), seconds,
+      after_from_before.Inverse().translation.norm(), after_from_before.RotationAngle() * 180.0 / M_PI);
+}
+
 void Tracker::PredictPose(FrameRecord& record) const {
-  // Beyond this many steps (10 s at 10 Hz) the prediction is held where it is.
-  constexpr int kMaxPredictedSteps = 100;
   if (last_tracked_reference_ == nullptr) return;
   Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
   if (last_velocity_) {
@@ -57,7 +81,7 @@ void Tracker::PredictPose(FrameRecord& record) const {
         last_step_seconds_ > 0.0 && record.timestamp > last_tracked_time_
             ? static_cast<int>(std::lround((record.timestamp - last_tracked_time_) / last_step_seconds_))
             : frames_since_tracked_;
-    for (int k = 0; k < std::min(steps, kMaxPredictedSteps); ++k)
+    for (int k = 0; k < std::min<int>(steps, kMaxPredictedSteps); ++k)
       camera_from_reference = *last_velocity_ * camera_from_reference;
   }
   record.reference = last_tracked_reference_;
