@@ -286,7 +286,9 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
     // the loss goes on).
     const bool just_relocalized =
         frame.id() < last_relocalization_frame_ + 2 && !last_relocalization_recovered_;
-    if (!velocity_ || map_changed || just_relocalized) {
+    // After a loop correction or a merge the motion model still holds (the last frame moved with its keyframe),
+    // and is checked against the reference keyframe when it keeps few points.
+    if (!velocity_ || just_relocalized) {
       ok = TrackReferenceKeyFrame(frame) > 0;
     } else {
       ok = TrackWithMotionModelOrReference(frame);
