@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <set>
 
 #include "semslam/geometry/pnp.h"
@@ -15,11 +14,12 @@ namespace semslam {
 namespace {
 
 constexpr int kMinInliers = 50;
-// Near the motion model's prediction fewer do: the tracker then asks 50 of the whole local map
-// (Tracker::TrackLocalMap), which a place that only looks the same does not give.
+// Near the motion model's prediction fewer do (right after a gap a monocular map holds few points the camera
+// still sees); the pose must also be where the prediction allows (options.plausible) and the tracker's local
+// map must confirm it (Tracker::TrackLocalMap).
 constexpr int kMinInliersNearPrediction = 30;
 
-// Clears the matches pose optimization rejected; returns those left.
+// Clears the matches pose optimization rejected.
 void DropOutliers(Frame& frame) {
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     if (frame.outliers[i]) {

@@ -147,8 +147,8 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   frame.reference_keyframe = kf2;
   last_keyframe_ = reference_keyframe_ = kf2;
   // The motion between the two frames, per frame, predicts the next one: matched to the second keyframe
-  // without a prediction instead, a street of repeated facades pulled the third frame 1.8 degrees off, and the
-  // motion model carried that turn on (9 degrees by the fifteenth frame, then lost).
+  // without a prediction instead, a street of repeated facades pulled the third frame 1.8 degrees off, and
+  // the motion model carried that turn on (9 degrees by the fifteenth frame, then lost).
   const double steps = static_cast<double>(std::max<std::uint64_t>(frame.id() - init_frame_->id(), 1));
   velocity_ = Interpolate(Rigid3d(), kf2->camera_from_world() * kf1->world_from_camera(), 1.0 / steps);
   last_big_change_ = map_.big_change_index();  // the new map is what the next frame is tracked in
