@@ -98,8 +98,9 @@ TEST_P(BlackOut, TheMapIsFoundAgainAndTheDriveGoesOnInIt) {
   EXPECT_LE(e.ate.rmse, mono ? 0.0025 * path : 0.25) << "ATE " << e.ate.rmse << " m over " << path << " m";
 }
 
-INSTANTIATE_TEST_SUITE_P(Modes, BlackOut, ::testing::Values("mono", "stereo"),
-                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+std::string ModeName(const ::testing::TestParamInfo<std::string>& mode) { return mode.param; }
+
+INSTANTIATE_TEST_SUITE_P(Modes, BlackOut, ::testing::Values("mono", "stereo"), ModeName);
 
 }  // namespace
 }  // namespace semslam::system_test

@@ -123,7 +123,9 @@ void Tracker::Reset() {
   last_velocity_.reset();
   const bool lost_map_kept = lost_map_ && [&] {
     auto lock = map_.ReadLock();
-    return !lost_map_->reference->is_bad();
+    FrameRecord last;
+    last.reference = lost_map_->reference;
+    return CurrentReference(last) != nullptr;  // the keyframe, or a good ancestor of it once culled
   }();
   if (lost_map_kept) {
     // The map given up was the one started after a loss: the lost map is searched again first, from where
