@@ -178,11 +178,25 @@ TEST_F(DisturbedStreet, SelfCalibrationIsLeftToMapsOfOneWindow) {
   GlobalBundleAdjustmentOptions options;
   options.window_keyframes = 12;
   auto lock = map_.WriteLock();
-  const IntrinsicsRefinement refinement = SelfCalibratingGlobalBundleAdjustment(map_, 0, options, 0.01);
+  const IntrinsicsRefinement refinement = SelfCalibratingGlobalBundleAdjustment(map_, 0, options, {});
   EXPECT_FALSE(refinement.accepted);
   EXPECT_NE(refinement.reason.find("more than one bundle-adjustment window"), std::string::npos)
       << refinement.reason;
   EXPECT_LT(RmsPointError(), 0.2 * points_before) << "the windowed plain BA ran instead";
+}
+
+TEST_F(DisturbedStreet, SelfCalibrationIsLeftToMapsOfEnoughKeyFrames) {
+  Disturb(0.02, 0.1);
+  const double points_before = RmsPointError();
+  SelfCalibrationOptions calibration;
+  calibration.min_keyframes = static_cast<int>(keyframes_.size()) + 1;
+  auto lock = map_.WriteLock();
+  const IntrinsicsRefinement refinement =
+      SelfCalibratingGlobalBundleAdjustment(map_, 0, GlobalBundleAdjustmentOptions{}, calibration);
+  EXPECT_FALSE(refinement.accepted);
+  EXPECT_NE(refinement.reason.find("too few to tell the camera"), std::string::npos) << refinement.reason;
+  EXPECT_EQ(refinement.refined.fx, refinement.nominal.fx);
+  EXPECT_LT(RmsPointError(), 0.2 * points_before) << "the plain BA ran instead";
 }
 
 }  // namespace

@@ -205,10 +205,17 @@ void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAd
   ReleaseFreeMemory();
 }
 
+void SelfCalibrationOptions::Check() const {
+  Require(std::isfinite(min_cost_reduction) && min_cost_reduction >= 0 && min_cost_reduction < 1,
+          "self-calibration: min_cost_reduction must be in [0, 1)");
+  Require(min_keyframes >= 3, "self-calibration: min_keyframes must be at least 3");
+}
+
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
                                                            const GlobalBundleAdjustmentOptions& options,
-                                                           double min_cost_reduction) {
+                                                           const SelfCalibrationOptions& calibration) {
   options.Check();
+  calibration.Check();
   IntrinsicsRefinement refinement;
   refinement.map_id = map_id;
   const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
@@ -219,6 +226,12 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     GlobalBundleAdjustment(map, map_id, options);
     refinement.reason = fmt::format("the map's {} keyframes are more than one bundle-adjustment window ({})",
                                     keyframes.size(), options.window_keyframes);
+    return refinement;
+  }
+  if (keyframes.size() < static_cast<size_t>(calibration.min_keyframes)) {
+    GlobalBundleAdjustment(map, map_id, options);
+    refinement.reason = fmt::format("the map's {} keyframes are too few to tell the camera ({} at least)",
+                                    keyframes.size(), calibration.min_keyframes);
     return refinement;
   }
   // The plain BA first: the map keeps its result unless the refinement earns its five parameters.
@@ -239,7 +252,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     const PinholeCamera& refined = *result.refined_camera;
     refinement.refined = refined;
     refinement.refined_cost = result.final_capped_chi2;
-    if (refinement.plain_cost - refinement.refined_cost < min_cost_reduction * refinement.plain_cost) {
+    if (refinement.plain_cost - refinement.refined_cost < calibration.min_cost_reduction * refinement.plain_cost) {
       refinement.reason = "it lowered the cost too little to be told from noise";
     } else if (std::abs(refined.fx / nominal.fx - 1.0) > 0.10) {
       refinement.reason = "the focal length moved more than 10 %";

@@ -82,6 +82,16 @@ struct IntrinsicsRefinement {
   double plain_cost = 0.0, refined_cost = 0.0;
 };
 
+// When the final BA of a monocular map may also refine the intrinsics.
+struct SelfCalibrationOptions {
+  // The refinement must lower the robust cost by this share of it to be kept.
+  double min_cost_reduction = 0.01;
+  // Fewer keyframes see too little of the image from too few places to tell the camera from the trajectory: a
+  // short map bent by a poor start found a camera 4 % off in focal length and 33 px off in principal point.
+  int min_keyframes = 15;
+  void Check() const;
+};
+
 // The global BA of a monocular map, then one that also refines the intrinsics
 // (BundleAdjustmentOptions::refine_intrinsics) from its result. The map keeps the refinement only when it earns
 // its five parameters, lowering the robust cost by at least `min_cost_reduction` of it, and is plausible:
@@ -92,7 +102,7 @@ struct IntrinsicsRefinement {
 // (GlobalBundleAdjustmentOptions) gets the windowed plain BA alone. Write lock held by the caller.
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
                                                            const GlobalBundleAdjustmentOptions& options,
-                                                           double min_cost_reduction);
+                                                           const SelfCalibrationOptions& calibration);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
 // cleared from `matches12`. Returns the inlier count. Read lock.

@@ -79,6 +79,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"final_global_ba", Bind(&o->final_global_ba)},
       {"final_refine_intrinsics", Bind(&o->final_refine_intrinsics)},
       {"final_refine_intrinsics_min_reduction", Bind(&o->final_refine_intrinsics_min_reduction)},
+      {"final_refine_intrinsics_min_keyframes", Bind(&o->final_refine_intrinsics_min_keyframes)},
       {"max_queued_keyframes", Bind(&o->max_queued_keyframes)},
       {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
   };

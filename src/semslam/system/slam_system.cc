@@ -46,6 +46,7 @@ void SlamOptions::Check() const {
   Require(std::isfinite(final_refine_intrinsics_min_reduction) && final_refine_intrinsics_min_reduction >= 0 &&
               final_refine_intrinsics_min_reduction < 1,
           "final_refine_intrinsics_min_reduction must be in [0, 1)");
+  Require(final_refine_intrinsics_min_keyframes >= 3, "final_refine_intrinsics_min_keyframes must be at least 3");
   tracker.Check();
   mapper.Check();
   loop.Check();
@@ -258,12 +259,14 @@ void SlamSystem::Finish() {
     GlobalBundleAdjustmentOptions global_ba;
     global_ba.iterations = options_.final_global_ba_iterations;
     global_ba.window_keyframes = options_.loop.global_ba_window_keyframes;
+    SelfCalibrationOptions calibration;
+    calibration.min_cost_reduction = options_.final_refine_intrinsics_min_reduction;
+    calibration.min_keyframes = options_.final_refine_intrinsics_min_keyframes;
     for (const std::uint32_t map_id : map_->MapIds()) {
       if (map_->NumKeyFramesOfMap(map_id) <= 2) continue;
       if (refine) {
         const IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back(
-            SelfCalibratingGlobalBundleAdjustment(*map_, map_id, global_ba,
-                                                  options_.final_refine_intrinsics_min_reduction));
+            SelfCalibratingGlobalBundleAdjustment(*map_, map_id, global_ba, calibration));
         if (r.accepted) {
           spdlog::info("map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
                        "point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; cost {:.0f} -> {:.0f}",

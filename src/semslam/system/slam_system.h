@@ -64,6 +64,8 @@ struct SlamOptions {
   bool final_refine_intrinsics = true;
   // ... and keeps the refinement only when it lowers the robust reprojection cost by this share of it.
   double final_refine_intrinsics_min_reduction = 0.01;
+  // ... and only in a map of at least this many keyframes.
+  int final_refine_intrinsics_min_keyframes = 15;
   // Keyframes waiting for the mapper: with more, tracking waits for it (on a busy machine a mapper that falls
   // behind leaves tracking without the points it needs at the next turn). 0: never wait.
   int max_queued_keyframes = 2;
