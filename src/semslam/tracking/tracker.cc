@@ -284,8 +284,8 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
       const auto corrected = records_.empty() ? std::nullopt : CurrentCameraFromWorld(records_.back());
       if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
     }
-    // Right after a relocalization the motion is unknown, unless it was a recovery (the motion from before
-    // the loss goes on).
+    // Right after a relocalization the motion is unknown, unless it was a recovery (the mean motion over the
+    // gap goes on).
     const bool just_relocalized =
         frame.id() < last_relocalization_frame_ + 2 && !last_relocalization_recovered_;
     // After a loop correction or a merge the motion model still holds (the last frame moved with its keyframe),
@@ -315,7 +315,7 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
   if (last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr) {
     velocity_ = frame.camera_from_world() * last_frame_->world_from_camera();
   } else if (!result.relocalized || !last_relocalization_recovered_) {
-    velocity_.reset();  // a recovered frame keeps the motion from before the loss (Relocalize)
+    velocity_.reset();  // a recovered frame keeps the mean motion over the gap (Relocalize)
   }
   if (NeedNewKeyFrame(frame)) {
     lock.unlock();

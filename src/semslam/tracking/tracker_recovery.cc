@@ -99,8 +99,8 @@ bool Tracker::Relocalize(Frame& frame) {
   // Lost a moment ago, the camera is in the active map, near where the motion model puts it; on a loaded map
   // it may be anywhere in any map.
   const KeyFrame* last_reference = nullptr;
+  FrameRecord last;
   if (last_tracked_reference_ != nullptr) {
-    FrameRecord last;
     last.reference = last_tracked_reference_;
     last.camera_from_reference = last_tracked_camera_from_reference_;
     last_reference = CurrentReference(last);
@@ -138,7 +138,20 @@ bool Tracker::Relocalize(Frame& frame) {
   if (!ok) return false;
   last_relocalization_frame_ = frame.id();
   last_relocalization_recovered_ = relocalization.predicted.has_value();
-  velocity_ = last_relocalization_recovered_ ? last_velocity_ : std::nullopt;
+  velocity_.reset();
+  if (last_relocalization_recovered_) {
+    // The mean motion over the gap, per step: the car may have sped up or turned while the camera was lost,
+    // and the motion from before the loss, carried on, put the next stereo frame a quarter metre short of
+    // where it was (a frame tracked on 37 points, made a keyframe, and the map bent by 4 degrees after it).
+    const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
+    const double steps = last_step_seconds_ > 0.0 && frame.timestamp() > last_tracked_time_
+                             ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
+                             : static_cast<double>(frames_since_tracked_ + 1);
+    velocity_ = last_camera_from_world && steps >= 1.0
+                    ? Interpolate(Rigid3d(), frame.camera_from_world() * last_camera_from_world->Inverse(),
+                                  1.0 / steps)
+                    : last_velocity_;
+  }
   // The reference keyframe is chosen by the local map step that follows.
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     MapPoint* p = frame.map_points[i];
