@@ -33,9 +33,9 @@ struct RelocalizationOptions {
 
 // Tries the nearby keyframes' points where the prediction projects them, then the nearby keyframes and the
 // place candidates (map/place_candidates.h) of `frame` (whose bag of words is computed) by bag of words,
-// until one gives a pose with at least 50 inliers that `options.plausible` accepts. `optimize_pose` refines
-// the frame pose from frame.map_points and sets frame.outliers, returning the inlier count. On success the
-// frame has its pose and matches. Read lock.
+// until one gives a pose that `options.plausible` accepts with at least 50 inliers (30 when found where the
+// prediction put it). `optimize_pose` refines the frame pose from frame.map_points and sets frame.outliers,
+// returning the inlier count. On success the frame has its pose and matches. Read lock.
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
                      const std::function<int(Frame&)>& optimize_pose,
                      const RelocalizationOptions& options = {});
