@@ -36,6 +36,11 @@ std::filesystem::path SemslamBinary() {
   return std::filesystem::path(SEMSLAM_BINARY_DIR) / "bin" / "semslam";
 }
 
+std::filesystem::path SynthBinary() {
+  if (const char* env = std::getenv("SEMSLAM_SYNTH_BIN"); env != nullptr && *env != '\0') return env;
+  return SemslamBinary();
+}
+
 bool SharedDataRequired() {
   const char* env = std::getenv("SEMSLAM_REQUIRE_DATA");
   return env != nullptr && std::string_view(env) == "1";
@@ -71,9 +76,11 @@ std::string CommandResult::Describe() const {
   return s.str();
 }
 
-CommandResult RunSemslam(const std::vector<std::string>& args) {
+CommandResult RunSemslam(const std::vector<std::string>& args) { return RunBinary(SemslamBinary(), args); }
+
+CommandResult RunBinary(const std::filesystem::path& binary_path, const std::vector<std::string>& args) {
   CommandResult result;
-  const std::string binary = SemslamBinary().string();
+  const std::string binary = binary_path.string();
   std::vector<std::string> argv_strings = {binary};
   argv_strings.insert(argv_strings.end(), args.begin(), args.end());
   for (const std::string& a : argv_strings) {

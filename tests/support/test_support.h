@@ -13,8 +13,12 @@ namespace semslam::testing {
 std::filesystem::path SharedDataDir();
 // The path of `relative` under SharedDataDir(), or an empty path if it does not exist.
 std::filesystem::path SharedDataPath(const std::string& relative);
-// The built `semslam` executable.
+// The built `semslam` executable (SEMSLAM_BIN overrides it).
 std::filesystem::path SemslamBinary();
+// The `semslam` that renders the synthetic datasets tests run on: SEMSLAM_SYNTH_BIN, else SemslamBinary().
+// Rendering is deterministic and not what a sanitizer build is there to check, so CI renders them once with
+// the release binary and the sanitizer stages reuse them.
+std::filesystem::path SynthBinary();
 
 // A fresh, empty directory under the build tree, removed when the object goes out of scope.
 class TempDir {
@@ -50,6 +54,8 @@ struct CommandResult {
 // Runs `semslam args...` (arguments passed as they are, no shell) with stdout and stderr captured through
 // files in a temporary directory.
 CommandResult RunSemslam(const std::vector<std::string>& args);
+// The same with another `semslam` executable.
+CommandResult RunBinary(const std::filesystem::path& binary, const std::vector<std::string>& args);
 
 // The bytes of a file ("" if it cannot be read).
 std::string ReadText(const std::filesystem::path& path);

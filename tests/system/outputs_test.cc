@@ -18,17 +18,7 @@ namespace {
 constexpr int kFrames = 150;
 
 // `semslam synth --frames 150 --seed 1`.
-Artifact City150() {
-  const std::vector<std::string> synth = {"synth", "--frames", std::to_string(kFrames), "--seed", "1", "-q"};
-  Artifact data = SharedArtifact("city150", synth, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> full = synth;
-    full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
-    const CommandResult r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
-  if (data.ok()) data.dir /= "dataset";
-  return data;
-}
+Artifact City150() { return SyntheticTown("city150", kFrames, 1); }
 
 // Then `semslam run ... --gps --landmarks --segmenter truth-noisy:0.25`.
 Artifact Run150() {

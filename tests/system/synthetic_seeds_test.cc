@@ -45,19 +45,8 @@ std::string Name(const ::testing::TestParamInfo<SeedRun>& info) {
   return std::string(info.param.mode) + "_seed" + std::to_string(info.param.seed);
 }
 
-// `semslam synth` of the town, in <artifact>/dataset.
-Artifact Town(std::uint64_t seed) {
-  const std::vector<std::string> args = {"synth", "--frames", std::to_string(kTownFrames), "--seed",
-                                         std::to_string(seed), "-q"};
-  Artifact town = SharedArtifact("town" + std::to_string(seed), args, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> full = args;
-    full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
-    const CommandResult r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
-  if (town.ok()) town.dir /= "dataset";
-  return town;
-}
+// `semslam synth` of the town.
+Artifact Town(std::uint64_t seed) { return SyntheticTown("town" + std::to_string(seed), kTownFrames, seed); }
 
 Artifact SeedRunOf(const SeedRun& p, const fs::path& dataset) {
   const std::vector<std::string> args = {

@@ -45,8 +45,7 @@ bool SameBytes(const fs::path& a, const fs::path& b) {
 
 namespace {
 
-std::string BinaryIdentity() {
-  const fs::path binary = testing::SemslamBinary();
+std::string BinaryIdentity(const fs::path& binary) {
   std::error_code ec;
   const auto size = fs::file_size(binary, ec);
   const auto time = fs::last_write_time(binary, ec).time_since_epoch().count();
@@ -76,8 +75,8 @@ constexpr const char* kErrorFile = "ARTIFACT_ERROR.txt";
 }  // namespace
 
 Artifact SharedArtifact(const std::string& name, const std::vector<std::string>& recipe,
-                        const std::function<std::string(const fs::path& dir)>& make) {
-  std::string key = BinaryIdentity();
+                        const std::function<std::string(const fs::path& dir)>& make, const fs::path& binary) {
+  std::string key = BinaryIdentity(binary);
   for (const std::string& r : recipe) key += "|" + r;
   std::ostringstream hash;
   hash << std::hex << std::hash<std::string>{}(key);
@@ -114,23 +113,29 @@ Artifact SharedArtifact(const std::string& name, const std::vector<std::string>&
   return artifact;
 }
 
-namespace {
-
-Artifact Synthetic(const std::string& name, int frames) {
-  const std::vector<std::string> args = {"synth", "--frames", std::to_string(frames), "--seed", "1", "-q"};
-  return SharedArtifact(name, args, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> full = args;
-    full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
-    const CommandResult r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
+Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed) {
+  const std::vector<std::string> args = {"synth", "--frames", std::to_string(frames), "--seed",
+                                         std::to_string(seed), "-q"};
+  const fs::path binary = testing::SynthBinary();
+  Artifact town = SharedArtifact(
+      name, args,
+      [&](const fs::path& dir) -> std::string {
+        std::vector<std::string> full = args;
+        full.insert(full.begin() + 1, {"--out", (dir / "dataset").string()});
+        const CommandResult r = testing::RunBinary(binary, full);
+        return r.Succeeded() ? "" : r.Describe();
+      },
+      binary);
+  if (town.ok()) town.dir /= "dataset";
+  return town;
 }
+
+namespace {
 
 // A `semslam run` of `dataset` with extra arguments, into <artifact>/out.
 Artifact Run(const std::string& name, const Artifact& dataset, const std::vector<std::string>& extra) {
   if (!dataset.ok()) return {{}, dataset.error};
-  const fs::path data = dataset.dir / "dataset";
-  std::vector<std::string> args = {"run", "--sequence", SequenceDir(data).string(), "-q"};
+  std::vector<std::string> args = {"run", "--sequence", SequenceDir(dataset.dir).string(), "-q"};
   args.insert(args.end(), extra.begin(), extra.end());
   Artifact run = SharedArtifact(name, args, [&](const fs::path& dir) -> std::string {
     std::vector<std::string> full = args;
@@ -146,34 +151,26 @@ Artifact Run(const std::string& name, const Artifact& dataset, const std::vector
 
 }  // namespace
 
-Artifact SyntheticDataset() {
-  Artifact a = Synthetic("city200", kSyntheticFrames);
-  if (a.ok()) a.dir /= "dataset";
-  return a;
-}
+Artifact SyntheticDataset() { return SyntheticTown("city200", kSyntheticFrames, 1); }
 
-Artifact TinyDataset() {
-  Artifact a = Synthetic("city6", 6);
-  if (a.ok()) a.dir /= "dataset";
-  return a;
-}
+Artifact TinyDataset() { return SyntheticTown("city6", 6, 1); }
 
 Artifact MonoRun() {
-  const Artifact raw = Synthetic("city200", kSyntheticFrames);
-  if (!raw.ok()) return raw;
-  const fs::path data = raw.dir / "dataset";
-  return Run("mono_run", raw,
+  const Artifact city = SyntheticDataset();
+  if (!city.ok()) return city;
+  const fs::path data = city.dir;
+  return Run("mono_run", city,
              {"--mode", "mono", "--pacing", "synchronous", "--segmenter", "truth-noisy:0.25", "--gps",
               (data / "oxts").string(), "--landmarks", (data / "landmarks.csv").string()});
 }
 
 Artifact StereoRun() {
-  return Run("stereo_run", Synthetic("city200", kSyntheticFrames),
+  return Run("stereo_run", SyntheticDataset(),
              {"--mode", "stereo", "--pacing", "synchronous"});
 }
 
 Artifact TinyStereoRun() {
-  return Run("tiny_stereo_run", Synthetic("city6", 6), {"--mode", "stereo", "--pacing", "synchronous"});
+  return Run("tiny_stereo_run", TinyDataset(), {"--mode", "stereo", "--pacing", "synchronous"});
 }
 
 std::vector<double> Timestamps(const Trajectory& trajectory) {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstdint>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -42,10 +43,15 @@ struct Artifact {
   bool ok() const { return error.empty(); }
 };
 
-// Makes (once per binary and recipe) a directory with `make(dir)`, which returns "" on success or what went
+// Makes (once per `binary` and recipe) a directory with `make(dir)`, which returns "" on success or what went
 // wrong (a failure is cached too, so that tests sharing a broken run fail fast with the same message).
 Artifact SharedArtifact(const std::string& name, const std::vector<std::string>& recipe,
-                        const std::function<std::string(const fs::path& dir)>& make);
+                        const std::function<std::string(const fs::path& dir)>& make,
+                        const fs::path& binary = testing::SemslamBinary());
+
+// `semslam synth --frames F --seed S` rendered by testing::SynthBinary() (once per that binary), as the
+// artifact `name`; its dir is the dataset.
+Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed);
 
 // `semslam synth --out DIR --frames 200 --seed 1`: the synthetic city, 200 frames (~195 m, one left turn,
 // eight landmarks, GPS every frame with 1 m noise).
