@@ -90,7 +90,7 @@ TEST(Atlas, AGapLinkStandsBetweenTheGoodKeyFramesForItsEnds) {
   before->SetPose(Rigid3d(QuaternionExp(Eigen::Vector3d(0, 0.2, 0)), Eigen::Vector3d(0.5, 0, -1.0)));
   after->SetPose(Rigid3d(QuaternionExp(Eigen::Vector3d(0.1, -0.3, 0)), Eigen::Vector3d(0, 0.2, -2.0)));
   const Rigid3d after_from_before(QuaternionExp(Eigen::Vector3d(0, -0.4, 0.05)), Eigen::Vector3d(1, 0, -3));
-  const GapLink link{before, after, after_from_before, 2.0};
+  const GapLink link{before, after, after_from_before};
 
   std::optional<GapEdge> edge = ResolveGapLink(link);
   ASSERT_TRUE(edge.has_value());

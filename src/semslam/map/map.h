@@ -40,14 +40,13 @@ struct MapSession {
 
 // Where tracking took up again after a loss, as the motion model saw it: the first keyframe of the map
 // started after the loss (`after`), relative to the last keyframe tracked in the lost map (`before`), from
-// the motion before the loss carried over the `seconds` without a pose. Nothing in the images ties the two
+// the motion before the loss carried over the time without a pose. Nothing in the images ties the two
 // maps there; once they are merged (at a place seen in both), this link keeps the trajectory from folding at
 // the gap (loop closing weighs it as the rough prediction it is).
 struct GapLink {
   KeyFrame* before = nullptr;
   KeyFrame* after = nullptr;
   Rigid3d after_from_before;  // in the lost map's units
-  double seconds = 0.0;
 };
 
 // A gap link between the good keyframes standing for its two ends (each end itself, or the nearest good ancestor

@@ -123,9 +123,7 @@ void Tracker::Reset() {
   last_velocity_.reset();
   const bool lost_map_kept = lost_map_ && [&] {
     auto lock = map_.ReadLock();
-    FrameRecord last;
-    last.reference = lost_map_->reference;
-    return CurrentReference(last) != nullptr;  // the keyframe, or a good ancestor of it once culled
+    return CurrentReference(lost_map_->last_tracked()) != nullptr;  // the keyframe, or a good ancestor of it
   }();
   if (lost_map_kept) {
     // The map given up was the one started after a loss: the lost map is searched again first, from where
@@ -259,7 +257,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     frames_since_tracked_ = 0;
   } else {
     ++frames_since_tracked_;
-    PredictPose(record);
+    PredictPose(record, frames_since_tracked_);
   }
   records_.push_back(record);
   result.state = state_;

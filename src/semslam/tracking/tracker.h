@@ -110,6 +110,14 @@ struct FrameRecord {
   KeyFrame* reference = nullptr;  // nullptr when the frame has no pose
   Rigid3d camera_from_reference;
   PoseProvenance source = PoseProvenance::kNone;
+
+  // A pose relative to a keyframe, as a record (to resolve it as the map stands now).
+  static FrameRecord At(KeyFrame* reference, const Rigid3d& camera_from_reference) {
+    FrameRecord record;
+    record.reference = reference;
+    record.camera_from_reference = camera_from_reference;
+    return record;
+  }
 };
 
 // The frame's pose in its map as it stands now (through its reference keyframe, or the nearest parent of a
@@ -170,8 +178,16 @@ class Tracker {
   void LinkNewMapToLostMap(const Frame& frame);
   // Beyond this many steps of the last motion (10 s at 10 Hz) a lost camera's prediction stays where it is.
   static constexpr int kMaxPredictedSteps = 100;
-  // The record of a frame without a tracked pose: the motion model's prediction, when there is one.
-  void PredictPose(FrameRecord& record) const;
+  // The record of a frame without a tracked pose, `frames` after the last tracked one: the motion model's
+  // prediction, when there is one.
+  void PredictPose(FrameRecord& record, int frames) const;
+  // Steps of the last motion from the last tracked frame to one at `timestamp`, `frames` later: by the clock
+  // (dropped frames leave a gap in time), else by frames.
+  double StepsSinceTracked(double timestamp, int frames) const;
+  // The last tracked frame's pose, as a record.
+  FrameRecord LastTracked() const {
+    return FrameRecord::At(last_tracked_reference_, last_tracked_camera_from_reference_);
+  }
   // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking
   // lock was released: the frame follows its reference keyframe. Call under a map lock.
   void FollowMapChange(Frame& frame) const;
@@ -244,6 +260,8 @@ class Tracker {
     double time = 0.0;
     double step_seconds = 0.0;
     size_t record_index = 0;
+
+    FrameRecord last_tracked() const { return FrameRecord::At(reference, camera_from_reference); }
   };
   std::optional<LostMap> lost_map_;
 

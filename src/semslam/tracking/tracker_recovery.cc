@@ -47,9 +47,7 @@ bool Tracker::InitializeMap(Frame& frame) {
 void Tracker::LinkNewMapToLostMap(const Frame& frame) {
   auto lock = map_.WriteLock();
   KeyFrame* after = new_keyframes_.empty() ? nullptr : map_.KeyFrameById(new_keyframes_.front().keyframe_id);
-  FrameRecord last;
-  last.reference = lost_map_->reference;
-  last.camera_from_reference = lost_map_->camera_from_reference;
+  const FrameRecord last = lost_map_->last_tracked();
   const KeyFrame* before = CurrentReference(last);
   spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
                frame.id(), map_.active_map_id(),
@@ -64,7 +62,7 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
   for (long k = 0; k < std::min<long>(steps, kMaxPredictedSteps); ++k) {
     after_from_before = *lost_map_->velocity * after_from_before;
   }
-  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before, seconds});
+  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before});
   spdlog::info(
       "map {}'s first keyframe (frame {}) is linked to keyframe {} (frame {}) of map {} by the motion before "
       "the loss over {:.1f} s: {:.2f} apart, turned {:.1f} deg",
@@ -72,16 +70,18 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
       after_from_before.Inverse().translation.norm(), after_from_before.RotationAngle() * 180.0 / M_PI);
 }
 
-void Tracker::PredictPose(FrameRecord& record) const {
+double Tracker::StepsSinceTracked(double timestamp, int frames) const {
+  return last_step_seconds_ > 0.0 && timestamp > last_tracked_time_
+             ? (timestamp - last_tracked_time_) / last_step_seconds_
+             : static_cast<double>(frames);
+}
+
+void Tracker::PredictPose(FrameRecord& record, int frames) const {
   if (last_tracked_reference_ == nullptr) return;
   Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
   if (last_velocity_) {
-    // Steps of the last motion by the clock (dropped frames leave a gap in time), or by frames.
-    const int steps =
-        last_step_seconds_ > 0.0 && record.timestamp > last_tracked_time_
-            ? static_cast<int>(std::lround((record.timestamp - last_tracked_time_) / last_step_seconds_))
-            : frames_since_tracked_;
-    for (int k = 0; k < std::min<int>(steps, kMaxPredictedSteps); ++k)
+    const long steps = std::lround(StepsSinceTracked(record.timestamp, frames));
+    for (long k = 0; k < std::min<long>(steps, kMaxPredictedSteps); ++k)
       camera_from_reference = *last_velocity_ * camera_from_reference;
   }
   record.reference = last_tracked_reference_;
@@ -98,32 +98,27 @@ bool Tracker::Relocalize(Frame& frame) {
   relocalization.exclude_dynamic = options_.exclude_dynamic;
   // Lost a moment ago, the camera is in the active map, near where the motion model puts it; on a loaded map
   // it may be anywhere in any map.
-  const KeyFrame* last_reference = nullptr;
-  FrameRecord last;
-  if (last_tracked_reference_ != nullptr) {
-    last.reference = last_tracked_reference_;
-    last.camera_from_reference = last_tracked_camera_from_reference_;
-    last_reference = CurrentReference(last);
-  }
+  // The frame being relocalized is not counted in frames_since_tracked_ yet.
+  const int frames_since_tracked = frames_since_tracked_ + 1;
+  const FrameRecord last = LastTracked();
+  const KeyFrame* last_reference = CurrentReference(last);
   if (last_reference != nullptr) {
     relocalization.map_id = last_reference->map_id();
     relocalization.nearby = last_reference->BestCovisibles(kNearbyKeyFrames);
     relocalization.nearby.insert(relocalization.nearby.begin(), map_.KeyFrameById(last_reference->id()));
     FrameRecord predicted;
     predicted.timestamp = frame.timestamp();
-    PredictPose(predicted);
+    PredictPose(predicted, frames_since_tracked);
     const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(predicted);
     relocalization.predicted = camera_from_world;
     if (camera_from_world) {
       const Eigen::Vector3d center = camera_from_world->Inverse().translation;
       const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
-      // Three times the distance the last motion would cover in the time since the last tracked frame (by the
-      // clock, not by frames: dropped frames leave a gap in time), and never less than half the scene depth.
-      const double steps_since_tracked = last_step_seconds_ > 0.0
-                                             ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
-                                             : static_cast<double>(frames_since_tracked_ + 1);
-      const double radius = std::max(3.0 * step * std::max(1.0, steps_since_tracked),
-                                     0.5 * last_reference->SceneDepthQuantile(2));
+      // Three times the distance the last motion would cover in the time since the last tracked frame, and
+      // never less than half the scene depth.
+      const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
+      const double radius =
+          std::max(3.0 * step * std::max(1.0, steps), 0.5 * last_reference->SceneDepthQuantile(2));
       relocalization.plausible = [center, radius, id = frame.id()](const Frame& f) {
         const double distance = (f.center() - center).norm();
         if (distance <= radius) return true;
@@ -144,9 +139,7 @@ bool Tracker::Relocalize(Frame& frame) {
     // and the motion from before the loss, carried on, put the next stereo frame a quarter metre short of
     // where it was (a frame tracked on 37 points, made a keyframe, and the map bent by 4 degrees after it).
     const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
-    const double steps = last_step_seconds_ > 0.0 && frame.timestamp() > last_tracked_time_
-                             ? (frame.timestamp() - last_tracked_time_) / last_step_seconds_
-                             : static_cast<double>(frames_since_tracked_ + 1);
+    const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
     velocity_ = last_camera_from_world && steps >= 1.0
                     ? Interpolate(Rigid3d(), frame.camera_from_world() * last_camera_from_world->Inverse(),
                                   1.0 / steps)
