@@ -10,6 +10,22 @@
 
 namespace semslam {
 
+namespace {
+
+// Steps of a motion that takes `step_seconds` from time `from` to time `to`: by the clock (dropped frames
+// leave a gap in time), else `frames`.
+double MotionSteps(double from, double to, double step_seconds, int frames) {
+  return step_seconds > 0.0 && to > from ? (to - from) / step_seconds : static_cast<double>(frames);
+}
+
+// `pose` moved on by `steps` (rounded) steps of `velocity`, at most `max_steps`.
+Rigid3d CarryMotion(const Rigid3d& velocity, double steps, int max_steps, Rigid3d pose) {
+  for (long k = 0; k < std::min<long>(std::lround(steps), max_steps); ++k) pose = velocity * pose;
+  return pose;
+}
+
+}  // namespace
+
 void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
   std::uint32_t old_map = 0, new_map = 0;
   {
@@ -57,11 +73,9 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
   // Where the motion before the loss puts the new map's first keyframe, relative to the last keyframe
   // tracked.
   const double seconds = after->timestamp() - lost_map_->time;
-  const long steps = std::lround(seconds / lost_map_->step_seconds);
-  Rigid3d after_from_before = *CurrentCameraFromWorld(last) * before->world_from_camera();
-  for (long k = 0; k < std::min<long>(steps, kMaxPredictedSteps); ++k) {
-    after_from_before = *lost_map_->velocity * after_from_before;
-  }
+  const Rigid3d after_from_before = CarryMotion(
+      *lost_map_->velocity, MotionSteps(lost_map_->time, after->timestamp(), lost_map_->step_seconds, 0),
+      kMaxPredictedSteps, *CurrentCameraFromWorld(last) * before->world_from_camera());
   map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before});
   spdlog::info(
       "map {}'s first keyframe (frame {}) is linked to keyframe {} (frame {}) of map {} by the motion before "
@@ -71,21 +85,16 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
 }
 
 double Tracker::StepsSinceTracked(double timestamp, int frames) const {
-  return last_step_seconds_ > 0.0 && timestamp > last_tracked_time_
-             ? (timestamp - last_tracked_time_) / last_step_seconds_
-             : static_cast<double>(frames);
+  return MotionSteps(last_tracked_time_, timestamp, last_step_seconds_, frames);
 }
 
 void Tracker::PredictPose(FrameRecord& record, int frames) const {
   if (last_tracked_reference_ == nullptr) return;
-  Rigid3d camera_from_reference = last_tracked_camera_from_reference_;
-  if (last_velocity_) {
-    const long steps = std::lround(StepsSinceTracked(record.timestamp, frames));
-    for (long k = 0; k < std::min<long>(steps, kMaxPredictedSteps); ++k)
-      camera_from_reference = *last_velocity_ * camera_from_reference;
-  }
   record.reference = last_tracked_reference_;
-  record.camera_from_reference = camera_from_reference;
+  record.camera_from_reference =
+      last_velocity_ ? CarryMotion(*last_velocity_, StepsSinceTracked(record.timestamp, frames),
+                                   kMaxPredictedSteps, last_tracked_camera_from_reference_)
+                     : last_tracked_camera_from_reference_;
   record.source = PoseProvenance::kPredicted;
 }
 
