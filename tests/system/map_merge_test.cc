@@ -42,9 +42,11 @@ TEST(MapMerge, ARealDriveCutBeforeItsRevisitStartsAMapAndMergesItThere) {
   // Measured 288: the cut's first frame, then the 10 of the 1 s before the new map, predicted.
   EXPECT_GE(j.value("with_pose", 0), kFrames - 15);
 
-  // Both sides of the cut in one frame: measured 0.39-0.45 m over the 299 frames (181 m).
+  // Both sides of the cut in one frame: measured 0.278-0.286 m over the 299 frames (181 m). The merge (at
+  // scale 1.47) once scaled the new map's neighbourhood of the merge twice, and this drive came out at
+  // 0.39-0.45 m.
   ASSERT_TRUE(j.contains("ate_rmse")) << j.dump(2);
-  EXPECT_LE(j["ate_rmse"].get<double>(), 0.6);
+  EXPECT_LE(j["ate_rmse"].get<double>(), 0.35);
 }
 
 }  // namespace
