@@ -55,6 +55,12 @@ void Frame::SetPose(const Rigid3d& camera_from_world) {
   world_from_camera_ = camera_from_world.Inverse();
 }
 
+void Frame::ClearMatches() {
+  std::fill(map_points.begin(), map_points.end(), nullptr);
+  std::fill(outliers.begin(), outliers.end(), false);
+  reference_keyframe = nullptr;
+}
+
 int Frame::CountMatches() const {
   int n = 0;
   for (size_t i = 0; i < map_points.size(); ++i) {

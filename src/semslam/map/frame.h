@@ -60,6 +60,9 @@ class Frame {
   std::vector<MapPoint*> map_points;
   std::vector<bool> outliers;
   int CountMatches() const;
+  // Drops every match and the reference keyframe (a frame that failed to track keeps nothing of the map it
+  // was tried in).
+  void ClearMatches();
 
   // Bag of words, computed on demand (relocalization) or when the frame becomes a keyframe.
   bool has_bow = false;
