@@ -52,7 +52,6 @@ void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
 }
 
 bool Tracker::InitializeMap(Frame& frame) {
-  frame.ClearMatches();  // a new map's keyframes hold its own points only
   const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
   if (ok && lost_map_) {
     ++num_new_maps_;
