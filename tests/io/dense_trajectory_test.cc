@@ -39,13 +39,18 @@ TEST(FillFrameGaps, EveryFrameGetsALine) {
   EXPECT_EQ(dense.first_frame, 10u);
   EXPECT_EQ(dense.Count(PoseSource::kEstimated), 10u);
   EXPECT_EQ(dense.Count(PoseSource::kFirstPose), 3u);
-  EXPECT_EQ(dense.Count(PoseSource::kMotionModel), 7u);  // 20..24 and 28, 29
+  EXPECT_EQ(dense.Count(PoseSource::kInterpolated), 5u);  // 20..24
+  EXPECT_EQ(dense.Count(PoseSource::kMotionModel), 2u);   // 28, 29
   for (size_t f = 10; f < 13; ++f) {
     EXPECT_EQ(dense.source[f - 10], PoseSource::kFirstPose);
     ExpectSamePose(dense.world_from_camera[f - 10], DrivePose(13), 1e-12, f);
   }
-  // Constant motion: the motion model predicts the true poses of the lost frames.
-  for (const size_t f : {20, 21, 22, 23, 24, 28, 29}) {
+  // Steady motion through a turn: the bridge and the motion model give the true poses of the lost frames.
+  for (const size_t f : {20, 21, 22, 23, 24}) {
+    EXPECT_EQ(dense.source[f - 10], PoseSource::kInterpolated) << f;
+    ExpectSamePose(dense.world_from_camera[f - 10], DrivePose(f), 1e-9, f);
+  }
+  for (const size_t f : {28, 29}) {
     EXPECT_EQ(dense.source[f - 10], PoseSource::kMotionModel) << f;
     ExpectSamePose(dense.world_from_camera[f - 10], DrivePose(f), 1e-9, f);
   }
@@ -70,12 +75,42 @@ TEST(FillFrameGaps, LongGapsHoldTheLastPrediction) {
 }
 
 TEST(FillFrameGaps, VelocityOverAGapIsPerFrame) {
-  // Frames 0 and 2 estimated (1 lost between): the step to frame 3 is half the motion from 0 to 2.
+  // Frames 0 and 2 estimated (1 lost between): the step to frame 3 is half the motion from 0 to 2, and frame 1,
+  // with no velocity known at either end, lies halfway along the motion from 0 to 2.
   const DenseTrajectory dense = FillFrameGaps(Estimated({0, 2}), 0, 4);
-  EXPECT_EQ(dense.source[1], PoseSource::kHeld);  // no velocity known yet: frame 0's pose
-  ExpectSamePose(dense.world_from_camera[1], DrivePose(0), 1e-12, 1);
+  EXPECT_EQ(dense.source[1], PoseSource::kInterpolated);
+  ExpectSamePose(dense.world_from_camera[1], DrivePose(1), 1e-9, 1);
   EXPECT_EQ(dense.source[3], PoseSource::kMotionModel);
   ExpectSamePose(dense.world_from_camera[3], DrivePose(3), 1e-9, 3);
+}
+
+TEST(FillFrameGaps, ABridgeSpreadsTheDisagreementOfItsEnds) {
+  // Tracking lost after frame 10 and found again at 31 with the world shifted 0.5 sideways (a relocalization's
+  // error): the bridge leaves frame 10 on the true path and reaches 31's shifted one, linearly in between.
+  const Eigen::Vector3d shift(0.5, 0, 0);
+  std::vector<IndexedPose> estimated = Estimated({9, 10, 31, 32});
+  for (size_t i = 2; i < 4; ++i) estimated[i].world_from_camera.translation += shift;
+  const DenseTrajectory dense = FillFrameGaps(estimated, 9, 33);
+  for (size_t f = 11; f <= 30; ++f) {
+    EXPECT_EQ(dense.source[f - 9], PoseSource::kInterpolated) << f;
+    const Rigid3d expected(DrivePose(f).rotation,
+                           DrivePose(f).translation + shift * static_cast<double>(f - 10) / 21.0);
+    ExpectSamePose(dense.world_from_camera[f - 9], expected, 1e-9, f);
+  }
+}
+
+TEST(FillFrameGaps, LongGapsAreBridgedAlongTheGeodesic) {
+  // Straight ahead at 1 per frame, then the car stands: over a gap this long the ends' velocities are no guide,
+  // and frame 6 lies halfway from frame 1 to frame 11; over a short one they shape the bridge.
+  std::vector<IndexedPose> estimated;
+  for (const auto& [frame, z] : std::vector<std::pair<size_t, double>>{{0, 0}, {1, 1}, {11, 2}, {12, 2}}) {
+    estimated.push_back({frame, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, z))});
+  }
+  DenseTrajectoryOptions long_gap;
+  long_gap.max_velocity_bridge_frames = 8;  // the gap holds 9 frames
+  EXPECT_NEAR(FillFrameGaps(estimated, 0, 13, long_gap).world_from_camera[6].translation.z(), 1.5, 1e-12);
+  // Defaults: from frame 1 at 1 per frame (6 at frame 6), from frame 11 standing (2), halfway between.
+  EXPECT_NEAR(FillFrameGaps(estimated, 0, 13).world_from_camera[6].translation.z(), 4.0, 1e-12);
 }
 
 TEST(FillFrameGaps, NothingEstimatedGivesIdentitiesAndOutsidePosesAreIgnored) {

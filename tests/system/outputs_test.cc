@@ -89,7 +89,8 @@ TEST(Outputs, TrajectoryKittiHasOneLinePerFrameAsEvoReadsIt) {
   EXPECT_EQ(filled.at("frames").get<size_t>(), static_cast<size_t>(kFrames));
   EXPECT_EQ(filled.at("own_pose").get<size_t>(), tum.size());
   EXPECT_EQ(filled.at("own_pose").get<size_t>() + filled.at("first_pose").get<size_t>() +
-                filled.at("motion_model").get<size_t>() + filled.at("held").get<size_t>(),
+                filled.at("interpolated").get<size_t>() + filled.at("motion_model").get<size_t>() +
+                filled.at("held").get<size_t>(),
             static_cast<size_t>(kFrames));
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 #include "semslam/core/atomic_file.h"
@@ -168,11 +169,50 @@ void WriteTimes(const fs::path& path, const std::vector<double>& timestamps) {
 
 void DenseTrajectoryOptions::Check() const {
   Require(max_predicted_frames >= 0, "max_predicted_frames must not be negative");
+  Require(max_velocity_bridge_frames >= 0, "max_velocity_bridge_frames must not be negative");
 }
 
 size_t DenseTrajectory::Count(PoseSource what) const {
   return static_cast<size_t>(std::count(source.begin(), source.end(), what));
 }
+
+namespace {
+
+// The motion per frame, as a twist of camera_earlier_from_camera_later, between two estimated frames.
+Eigen::Vector6d TwistPerFrame(const IndexedPose& earlier, const IndexedPose& later) {
+  const double frames = static_cast<double>(later.frame_index - earlier.frame_index);
+  return (earlier.world_from_camera.Inverse() * later.world_from_camera).Log() / frames;
+}
+
+// A gap between the estimated frames `start` and `end`: each end's constant-velocity prediction (its velocity
+// from its estimated neighbour outside the gap, or the gap's own mean motion) carried into the gap, blended by
+// nearness, so that the bridge leaves each end at that end's velocity and agrees with steady motion exactly.
+class GapBridge {
+ public:
+  GapBridge(const IndexedPose& start, const IndexedPose& end, const IndexedPose* before_start,
+            const IndexedPose* after_end, bool use_end_velocities)
+      : start_(start), end_(end) {
+    const Eigen::Vector6d mean = TwistPerFrame(start, end);
+    start_velocity_ = use_end_velocities && before_start != nullptr ? TwistPerFrame(*before_start, start) : mean;
+    end_velocity_ = use_end_velocities && after_end != nullptr ? TwistPerFrame(end, *after_end) : mean;
+  }
+
+  Rigid3d WorldFromCamera(size_t frame) const {
+    const double from_start = static_cast<double>(frame - start_.frame_index);
+    const double to_end = static_cast<double>(end_.frame_index - frame);
+    const Rigid3d from_start_side = start_.world_from_camera * Rigid3d::Exp(start_velocity_ * from_start);
+    const Rigid3d from_end_side = end_.world_from_camera * Rigid3d::Exp(-end_velocity_ * to_end);
+    return Interpolate(from_start_side, from_end_side, from_start / (from_start + to_end));
+  }
+
+ private:
+  const IndexedPose& start_;
+  const IndexedPose& end_;
+  Eigen::Vector6d start_velocity_;
+  Eigen::Vector6d end_velocity_;
+};
+
+}  // namespace
 
 DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t first_frame, size_t end_frame,
                               const DenseTrajectoryOptions& options) {
@@ -193,14 +233,17 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
   }
   if (in_range.empty()) return dense;  // identities: nothing better is known
 
+  const auto max_predicted = static_cast<size_t>(options.max_predicted_frames);
   size_t next = 0;                         // the next estimated pose in in_range
   const IndexedPose* last = nullptr;       // the last estimated pose before frame i
   const IndexedPose* before_last = nullptr;
+  std::optional<GapBridge> bridge;         // set while frame i lies between two estimated frames
   for (size_t i = 0; i < n; ++i) {
     const size_t frame = first_frame + i;
     if (next < in_range.size() && in_range[next]->frame_index == frame) {
       before_last = last;
       last = in_range[next++];
+      bridge.reset();
       dense.world_from_camera[i] = last->world_from_camera;
       dense.source[i] = PoseSource::kEstimated;
       continue;
@@ -210,24 +253,27 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
       dense.source[i] = PoseSource::kFirstPose;
       continue;
     }
-    // The tracker's motion model: the last step's motion (camera_from_world of the last frame times
-    // world_from_camera of the one before, per frame) applied again for every frame since.
-    const size_t since = frame - last->frame_index;
-    const bool predict = before_last != nullptr && since <= static_cast<size_t>(options.max_predicted_frames);
-    const size_t steps = before_last == nullptr
-                             ? 0
-                             : std::min(since, static_cast<size_t>(options.max_predicted_frames));
-    if (steps == 0) {
-      dense.world_from_camera[i] = last->world_from_camera;
-    } else {
-      const double step_frames = static_cast<double>(last->frame_index - before_last->frame_index);
-      const Rigid3d last_from_before =
-          last->world_from_camera.Inverse() * before_last->world_from_camera;  // camera_last_from_camera_before
-      const Eigen::Vector6d per_frame = last_from_before.Log() / step_frames;
-      const Rigid3d now_from_last = Rigid3d::Exp(per_frame * static_cast<double>(steps));
-      dense.world_from_camera[i] = last->world_from_camera * now_from_last.Inverse();
+    if (next < in_range.size()) {
+      if (!bridge) {
+        const IndexedPose& gap_end = *in_range[next];
+        const IndexedPose* after_end = next + 1 < in_range.size() ? in_range[next + 1] : nullptr;
+        const size_t gap = gap_end.frame_index - last->frame_index - 1;
+        bridge.emplace(*last, gap_end, before_last, after_end,
+                       gap <= static_cast<size_t>(options.max_velocity_bridge_frames));
+      }
+      dense.world_from_camera[i] = bridge->WorldFromCamera(frame);
+      dense.source[i] = PoseSource::kInterpolated;
+      continue;
     }
-    dense.source[i] = predict ? PoseSource::kMotionModel : PoseSource::kHeld;
+    // After the last estimated frame, the tracker's motion model: the last step's motion, per frame, applied
+    // again for every frame since, up to max_predicted_frames; then held.
+    const size_t since = frame - last->frame_index;
+    const size_t steps = before_last == nullptr ? 0 : std::min(since, max_predicted);
+    dense.world_from_camera[i] =
+        steps == 0 ? last->world_from_camera
+                   : last->world_from_camera *
+                         Rigid3d::Exp(TwistPerFrame(*before_last, *last) * static_cast<double>(steps));
+    dense.source[i] = before_last != nullptr && since <= max_predicted ? PoseSource::kMotionModel : PoseSource::kHeld;
   }
   return dense;
 }

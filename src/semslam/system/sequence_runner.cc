@@ -378,6 +378,7 @@ RunSummary RunSequence(const RunOptions& options) {
   run["trajectory_kitti"] = {{"frames", kitti.source.size()},
                              {"own_pose", kitti.Count(PoseSource::kEstimated)},
                              {"first_pose", kitti.Count(PoseSource::kFirstPose)},
+                             {"interpolated", kitti.Count(PoseSource::kInterpolated)},
                              {"motion_model", kitti.Count(PoseSource::kMotionModel)},
                              {"held", kitti.Count(PoseSource::kHeld)},
                              {"identity", kitti.Count(PoseSource::kNone)}};
