@@ -134,6 +134,24 @@ TEST_F(EvalCli, RawDriveFolderAsTheTruth) {
   EXPECT_NEAR(j.at("scale").get<double>(), 0.5, 1e-9);
   EXPECT_NEAR(j.at("path_length_m").get<double>(), 69.4, 0.1);
 
+  // The same as a KITTI pose file (what `semslam run` writes as trajectory.kitti): line i is frame i of the
+  // drive, stamped from the drive itself; a line missing is refused, naming the drive.
+  std::vector<Rigid3d> lines;
+  for (const StampedPose& p : scaled) lines.push_back(p.world_from_camera);
+  WriteKittiPoses(dir_ / "scaled.kitti", lines);
+  r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.kitti").string(), "--truth", drive.string(),
+                  "--camera", "image_02"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("matched"), 154);
+  EXPECT_NEAR(j.at("ate_rmse").get<double>(), 0.0, 1e-6);
+  lines.pop_back();
+  WriteKittiPoses(dir_ / "short.kitti", lines);
+  r = RunSemslam({"eval", "--estimate", (dir_ / "short.kitti").string(), "--truth", drive.string(),
+                  "--camera", "image_02"});
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("holds 153 poses but the sequence"), std::string::npos) << r.err;
+
   // Against camera 0's truth (frames 0-79, 6 ms later, 6 cm to the right): 80 matches, centimetres apart.
   r = RunSemslam({"eval", "--estimate", (dir_ / "scaled.tum").string(), "--truth", drive.string()});
   ASSERT_EQ(r.exit_code, 0) << r.Describe();

@@ -75,8 +75,8 @@ TEST(FillFrameGaps, LongGapsHoldTheLastPrediction) {
 }
 
 TEST(FillFrameGaps, VelocityOverAGapIsPerFrame) {
-  // Frames 0 and 2 estimated (1 lost between): the step to frame 3 is half the motion from 0 to 2, and frame 1,
-  // with no velocity known at either end, lies halfway along the motion from 0 to 2.
+  // Frames 0 and 2 estimated (1 lost between): the step to frame 3 is half the motion from 0 to 2, and frame
+  // 1, with no velocity known at either end, lies halfway along the motion from 0 to 2.
   const DenseTrajectory dense = FillFrameGaps(Estimated({0, 2}), 0, 4);
   EXPECT_EQ(dense.source[1], PoseSource::kInterpolated);
   ExpectSamePose(dense.world_from_camera[1], DrivePose(1), 1e-9, 1);
@@ -85,8 +85,9 @@ TEST(FillFrameGaps, VelocityOverAGapIsPerFrame) {
 }
 
 TEST(FillFrameGaps, ABridgeSpreadsTheDisagreementOfItsEnds) {
-  // Tracking lost after frame 10 and found again at 31 with the world shifted 0.5 sideways (a relocalization's
-  // error): the bridge leaves frame 10 on the true path and reaches 31's shifted one, linearly in between.
+  // Tracking lost after frame 10 and found again at 31 with the world shifted 0.5 sideways (a
+  // relocalization's error): the bridge leaves frame 10 on the true path and reaches 31's shifted one,
+  // linearly in between.
   const Eigen::Vector3d shift(0.5, 0, 0);
   std::vector<IndexedPose> estimated = Estimated({9, 10, 31, 32});
   for (size_t i = 2; i < 4; ++i) estimated[i].world_from_camera.translation += shift;
@@ -100,8 +101,8 @@ TEST(FillFrameGaps, ABridgeSpreadsTheDisagreementOfItsEnds) {
 }
 
 TEST(FillFrameGaps, LongGapsAreBridgedAlongTheGeodesic) {
-  // Straight ahead at 1 per frame, then the car stands: over a gap this long the ends' velocities are no guide,
-  // and frame 6 lies halfway from frame 1 to frame 11; over a short one they shape the bridge.
+  // Straight ahead at 1 per frame, then the car stands: over a gap this long the ends' velocities are no
+  // guide, and frame 6 lies halfway from frame 1 to frame 11; over a short one they shape the bridge.
   std::vector<IndexedPose> estimated;
   for (const auto& [frame, z] : std::vector<std::pair<size_t, double>>{{0, 0}, {1, 1}, {11, 2}, {12, 2}}) {
     estimated.push_back({frame, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, z))});

@@ -331,6 +331,13 @@ Trajectory ReadSequenceGroundTruth(const fs::path& sequence, const std::string& 
   return std::move(*truth);
 }
 
+std::vector<double> ReadSequenceTimes(const fs::path& sequence, const std::string& camera) {
+  const std::unique_ptr<ImageSequence> opened = OpenSequence(sequence, {camera, false});
+  std::vector<double> times(opened->size());
+  for (size_t i = 0; i < times.size(); ++i) times[i] = opened->Timestamp(i);
+  return times;
+}
+
 ErrorSeries ComputeErrorSeries(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
                                double max_dt) {
   Require(std::isfinite(max_dt) && max_dt >= 0, "ComputeErrorSeries: max_dt must be >= 0");
@@ -380,16 +387,22 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
   const TrajectoryFormat estimate_format = DetectTrajectoryFormat(estimate);
   const TrajectoryFormat truth_format =
       truth_is_sequence ? TrajectoryFormat::kTum : DetectTrajectoryFormat(truth);
-  if (estimate_format != truth_format && !times) {
+  std::optional<std::vector<double>> stamps;
+  if (times) {
+    stamps = ReadTimes(*times);
+  } else if (truth_is_sequence && estimate_format == TrajectoryFormat::kKitti) {
+    stamps = ReadSequenceTimes(truth, truth_camera);  // line i is frame i of that sequence
+  } else if (estimate_format != truth_format) {
     const fs::path& kitti = estimate_format == TrajectoryFormat::kKitti ? estimate : truth;
     const fs::path& tum = estimate_format == TrajectoryFormat::kTum ? estimate : truth;
-    throw InputError(
-        kitti, fmt::format("KITTI poses carry no timestamps: give the sequence's times.txt (--times) to "
-                           "match them against the {} {}",
-                           truth_is_sequence ? "sequence's ground truth of" : "TUM file", tum.string()));
+    throw InputError(kitti,
+                     fmt::format("KITTI poses carry no timestamps: give the sequence's times.txt (--times) "
+                                 "to match them against the TUM file {}",
+                                 tum.string()));
   }
-  std::optional<std::vector<double>> stamps;
-  if (times) stamps = ReadTimes(*times);
+  // Where the stamps come from, for messages.
+  const std::string stamps_source =
+      times ? times->filename().string() : fmt::format("the sequence {}", truth.string());
 
   // The frames the KITTI files cover: [first, end), end from the ground truth (KITTI) or the times.
   const size_t first = frames.first;
@@ -400,7 +413,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
       estimate_format == TrajectoryFormat::kKitti || truth_format == TrajectoryFormat::kKitti;
   size_t end = frames.end.value_or(available.value_or(0));
   if (uses_frames && available && end > *available) {
-    const fs::path& source = truth_format == TrajectoryFormat::kKitti ? truth : *times;
+    const fs::path source = truth_format == TrajectoryFormat::kKitti ? truth : times ? *times : truth;
     throw InputError(source, fmt::format("{} asked, but it covers only {} frames", RangeText(first, end),
                                          *available));
   }
@@ -427,8 +440,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
           truth_format == TrajectoryFormat::kKitti
               ? fmt::format("the ground truth {} has {} in {}", truth.filename().string(), expected,
                             RangeText(first, end))
-              : fmt::format("{} lists {} stamps in {}", times->filename().string(), expected,
-                            RangeText(first, end));
+              : fmt::format("{} lists {} stamps in {}", stamps_source, expected, RangeText(first, end));
       throw InputError(
           estimate,
           fmt::format("holds {} poses but {}: a KITTI pose file has no timestamps (line i is frame {}), so it "

@@ -141,15 +141,16 @@ struct FrameRange {
   std::optional<size_t> end;  // exclusive; default: as many frames as the ground truth (or times) has
 };
 
-// Reads two trajectory files (TUM or KITTI, see io/trajectory_io.h) and evaluates them. KITTI files take their
-// timestamps from `times` when given (line i: the stamp of frame frames.first + i), else their frame index; a
-// TUM file cannot be matched against a KITTI file without `times`. A KITTI ground truth is used over
+// Reads two trajectory files (TUM or KITTI, see io/trajectory_io.h) and evaluates them. KITTI files take
+// their timestamps from `times` when given (line i: the stamp of frame frames.first + i), else their frame
+// index; a TUM file cannot be matched against a KITTI file without `times`. A KITTI ground truth is used over
 // `frames`. A KITTI estimate must hold exactly one pose per frame it is compared with (the ground truth's
 // frames in the range when that is a KITTI file, else the stamps of `times` in the range): a missing line
 // would pair every later pose with the wrong frame, so the files are refused with the reason. The truth may
 // also be a sequence folder whose reader has a ground truth (io/sequence.h: a KITTI odometry sequence with
-// poses/, a KITTI raw drive with oxts/, the synthetic city), for its camera `truth_camera` (empty: the default
-// one), stamped with the sequence's timestamps. Throws InputError naming the files.
+// poses/, a KITTI raw drive with oxts/, the synthetic city), for its camera `truth_camera` (empty: the
+// default one), stamped with the sequence's timestamps; a KITTI estimate then takes the sequence's frame
+// stamps when no `times` are given. Throws InputError naming the files.
 TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estimate,
                                              const std::filesystem::path& truth,
                                              const std::optional<std::filesystem::path>& times,
@@ -158,5 +159,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estima
 // The ground truth of a sequence folder (see EvaluateTrajectoryFiles). Throws InputError naming the folder
 // when its reader has none.
 Trajectory ReadSequenceGroundTruth(const std::filesystem::path& sequence, const std::string& camera = {});
+// The timestamps of a sequence folder's frames, in order.
+std::vector<double> ReadSequenceTimes(const std::filesystem::path& sequence, const std::string& camera = {});
 
 }  // namespace semslam

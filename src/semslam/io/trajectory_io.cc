@@ -185,15 +185,17 @@ Eigen::Vector6d TwistPerFrame(const IndexedPose& earlier, const IndexedPose& lat
 }
 
 // A gap between the estimated frames `start` and `end`: each end's constant-velocity prediction (its velocity
-// from its estimated neighbour outside the gap, or the gap's own mean motion) carried into the gap, blended by
-// nearness, so that the bridge leaves each end at that end's velocity and agrees with steady motion exactly.
+// from its estimated neighbour outside the gap, or the gap's own mean motion) carried into the gap, blended
+// by nearness, so that the bridge leaves each end at that end's velocity and agrees with steady motion
+// exactly.
 class GapBridge {
  public:
   GapBridge(const IndexedPose& start, const IndexedPose& end, const IndexedPose* before_start,
             const IndexedPose* after_end, bool use_end_velocities)
       : start_(start), end_(end) {
     const Eigen::Vector6d mean = TwistPerFrame(start, end);
-    start_velocity_ = use_end_velocities && before_start != nullptr ? TwistPerFrame(*before_start, start) : mean;
+    start_velocity_ =
+        use_end_velocities && before_start != nullptr ? TwistPerFrame(*before_start, start) : mean;
     end_velocity_ = use_end_velocities && after_end != nullptr ? TwistPerFrame(end, *after_end) : mean;
   }
 
@@ -237,7 +239,7 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
   size_t next = 0;                         // the next estimated pose in in_range
   const IndexedPose* last = nullptr;       // the last estimated pose before frame i
   const IndexedPose* before_last = nullptr;
-  std::optional<GapBridge> bridge;         // set while frame i lies between two estimated frames
+  std::optional<GapBridge> bridge;  // set while frame i lies between two estimated frames
   for (size_t i = 0; i < n; ++i) {
     const size_t frame = first_frame + i;
     if (next < in_range.size() && in_range[next]->frame_index == frame) {
@@ -273,7 +275,8 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
         steps == 0 ? last->world_from_camera
                    : last->world_from_camera *
                          Rigid3d::Exp(TwistPerFrame(*before_last, *last) * static_cast<double>(steps));
-    dense.source[i] = before_last != nullptr && since <= max_predicted ? PoseSource::kMotionModel : PoseSource::kHeld;
+    dense.source[i] =
+        before_last != nullptr && since <= max_predicted ? PoseSource::kMotionModel : PoseSource::kHeld;
   }
   return dense;
 }

@@ -37,8 +37,8 @@ struct IndexedPose {
 enum class PoseSource : std::uint8_t {
   kEstimated,     // the frame's own pose (it was tracked)
   kFirstPose,     // before the first estimated frame: that frame's pose
-  kMotionModel,   // after the last estimated frame: the constant-velocity prediction from the two frames before
-  kHeld,          // longer trailing gaps: the last prediction (or, with no velocity known, the last pose), held
+  kMotionModel,   // after the last estimated frame: the constant-velocity prediction of the two before it
+  kHeld,          // longer trailing gaps: the last prediction (no velocity known: the last pose), held
   kInterpolated,  // between two estimated frames: bridged from both ends (DenseTrajectoryOptions)
   kNone,          // no frame was estimated at all: the identity (the world is the first camera's frame)
 };
@@ -48,8 +48,8 @@ struct DenseTrajectoryOptions {
   // prediction drifts quickly once the vehicle turns or brakes.
   int max_predicted_frames = 10;
   // A gap between two estimated frames of up to this many frames is bridged by blending the constant-velocity
-  // predictions from its two ends (exact for steady motion, a turn included); a longer one by the geodesic between
-  // the ends, as constant velocity over a longer span goes astray.
+  // predictions from its two ends (exact for steady motion, a turn included); a longer one by the geodesic
+  // between the ends, as constant velocity over a longer span goes astray.
   int max_velocity_bridge_frames = 50;
   void Check() const;  // throws InvalidArgument
 };

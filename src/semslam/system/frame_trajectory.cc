@@ -21,11 +21,12 @@ DenseTrajectory WriteKittiFrameTrajectory(const std::filesystem::path& path, con
   if (own == 0) {
     spdlog::warn("{}: no frame was tracked; every line is the identity", path.filename().string());
   } else if (own < dense.source.size()) {
-    spdlog::info("{}: {} of {} frames have their own pose; {} before the first take its pose, {} are bridged "
-                 "between tracked frames, {} after the last predicted by the motion model, {} held",
-                 path.filename().string(), own, dense.source.size(), dense.Count(PoseSource::kFirstPose),
-                 dense.Count(PoseSource::kInterpolated), dense.Count(PoseSource::kMotionModel),
-                 dense.Count(PoseSource::kHeld));
+    spdlog::info(
+        "{}: {} of {} frames have their own pose; {} before the first take its pose, {} are bridged "
+        "between tracked frames, {} after the last predicted by the motion model, {} held",
+        path.filename().string(), own, dense.source.size(), dense.Count(PoseSource::kFirstPose),
+        dense.Count(PoseSource::kInterpolated), dense.Count(PoseSource::kMotionModel),
+        dense.Count(PoseSource::kHeld));
   }
   return dense;
 }
