@@ -114,6 +114,28 @@ TEST(FillFrameGaps, LongGapsAreBridgedAlongTheGeodesic) {
   EXPECT_NEAR(FillFrameGaps(estimated, 0, 13).world_from_camera[6].translation.z(), 4.0, 1e-12);
 }
 
+TEST(FillFrameGaps, MotionIsCarriedInTimeOverDroppedFrames) {
+  // The camera dropped true frames 10..29 (2 s at 10 Hz): recorded frame r is true frame r, then r + 20.
+  // Tracking is lost for recorded 10..14 and after 16; the recorded frames' times say where the car was.
+  auto true_frame = [](size_t recorded) { return recorded < 10 ? recorded : recorded + 20; };
+  std::vector<double> times;
+  for (size_t r = 0; r < 20; ++r) times.push_back(0.1 * static_cast<double>(true_frame(r)));
+  std::vector<IndexedPose> estimated;
+  for (const size_t r : {8, 9, 15, 16}) estimated.push_back({r, DrivePose(true_frame(r))});
+  const DenseTrajectory dense = FillFrameGaps(estimated, 0, 20, {}, times);
+  for (size_t r = 10; r < 15; ++r) {
+    EXPECT_EQ(dense.source[r], PoseSource::kInterpolated) << r;
+    ExpectSamePose(dense.world_from_camera[r], DrivePose(true_frame(r)), 1e-9, r);
+  }
+  for (size_t r = 17; r < 20; ++r) {
+    EXPECT_EQ(dense.source[r], PoseSource::kMotionModel) << r;
+    ExpectSamePose(dense.world_from_camera[r], DrivePose(true_frame(r)), 1e-9, r);
+  }
+  EXPECT_THROW(FillFrameGaps(estimated, 0, 20, {}, std::vector<double>(19, 0.0)), InvalidArgument);
+  times[12] = times[11];
+  EXPECT_THROW(FillFrameGaps(estimated, 0, 20, {}, times), InvalidArgument);
+}
+
 TEST(FillFrameGaps, NothingEstimatedGivesIdentitiesAndOutsidePosesAreIgnored) {
   const DenseTrajectory none = FillFrameGaps({}, 5, 8);
   ASSERT_EQ(none.world_from_camera.size(), 3u);

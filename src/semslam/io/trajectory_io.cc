@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "semslam/core/atomic_file.h"
@@ -178,30 +179,44 @@ size_t DenseTrajectory::Count(PoseSource what) const {
 
 namespace {
 
-// The motion per frame, as a twist of camera_earlier_from_camera_later, between two estimated frames.
-Eigen::Vector6d TwistPerFrame(const IndexedPose& earlier, const IndexedPose& later) {
-  const double frames = static_cast<double>(later.frame_index - earlier.frame_index);
-  return (earlier.world_from_camera.Inverse() * later.world_from_camera).Log() / frames;
+// When each frame of a dense trajectory was taken: its timestamp, or its index when none are given (frames
+// evenly spaced). Frames dropped by the camera show as a jump in time, which the motion carries over.
+class FrameClock {
+ public:
+  FrameClock(size_t first_frame, std::span<const double> times) : first_(first_frame), times_(times) {}
+  double operator()(size_t frame) const {
+    return times_.empty() ? static_cast<double>(frame) : times_[frame - first_];
+  }
+
+ private:
+  size_t first_;
+  std::span<const double> times_;
+};
+
+// The motion per clock unit, as a twist of camera_earlier_from_camera_later, between two estimated frames.
+Eigen::Vector6d Velocity(const IndexedPose& earlier, const IndexedPose& later, const FrameClock& clock) {
+  const double elapsed = clock(later.frame_index) - clock(earlier.frame_index);
+  return (earlier.world_from_camera.Inverse() * later.world_from_camera).Log() / elapsed;
 }
 
 // A gap between the estimated frames `start` and `end`: each end's constant-velocity prediction (its velocity
 // from its estimated neighbour outside the gap, or the gap's own mean motion) carried into the gap, blended
-// by nearness, so that the bridge leaves each end at that end's velocity and agrees with steady motion
+// by nearness in time, so that the bridge leaves each end at that end's velocity and agrees with steady motion
 // exactly.
 class GapBridge {
  public:
   GapBridge(const IndexedPose& start, const IndexedPose& end, const IndexedPose* before_start,
-            const IndexedPose* after_end, bool use_end_velocities)
-      : start_(start), end_(end) {
-    const Eigen::Vector6d mean = TwistPerFrame(start, end);
+            const IndexedPose* after_end, bool use_end_velocities, const FrameClock& clock)
+      : start_(start), end_(end), clock_(clock) {
+    const Eigen::Vector6d mean = Velocity(start, end, clock);
     start_velocity_ =
-        use_end_velocities && before_start != nullptr ? TwistPerFrame(*before_start, start) : mean;
-    end_velocity_ = use_end_velocities && after_end != nullptr ? TwistPerFrame(end, *after_end) : mean;
+        use_end_velocities && before_start != nullptr ? Velocity(*before_start, start, clock) : mean;
+    end_velocity_ = use_end_velocities && after_end != nullptr ? Velocity(end, *after_end, clock) : mean;
   }
 
   Rigid3d WorldFromCamera(size_t frame) const {
-    const double from_start = static_cast<double>(frame - start_.frame_index);
-    const double to_end = static_cast<double>(end_.frame_index - frame);
+    const double from_start = clock_(frame) - clock_(start_.frame_index);
+    const double to_end = clock_(end_.frame_index) - clock_(frame);
     const Rigid3d from_start_side = start_.world_from_camera * Rigid3d::Exp(start_velocity_ * from_start);
     const Rigid3d from_end_side = end_.world_from_camera * Rigid3d::Exp(-end_velocity_ * to_end);
     return Interpolate(from_start_side, from_end_side, from_start / (from_start + to_end));
@@ -210,6 +225,7 @@ class GapBridge {
  private:
   const IndexedPose& start_;
   const IndexedPose& end_;
+  const FrameClock& clock_;
   Eigen::Vector6d start_velocity_;
   Eigen::Vector6d end_velocity_;
 };
@@ -217,14 +233,21 @@ class GapBridge {
 }  // namespace
 
 DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t first_frame, size_t end_frame,
-                              const DenseTrajectoryOptions& options) {
+                              const DenseTrajectoryOptions& options, std::span<const double> times) {
   options.Check();
-  Require(first_frame <= end_frame, fmt::format("frames {}:{}: the range ends before it starts", first_frame, end_frame));
+  Require(first_frame <= end_frame,
+          fmt::format("frames {}:{}: the range ends before it starts", first_frame, end_frame));
   for (size_t i = 1; i < estimated.size(); ++i) {
     Require(estimated[i].frame_index > estimated[i - 1].frame_index,
             "estimated poses must be in strictly increasing frame order");
   }
   const size_t n = end_frame - first_frame;
+  Require(times.empty() || times.size() == n,
+          fmt::format("{} timestamps for the {} frames {}:{}", times.size(), n, first_frame, end_frame));
+  for (size_t i = 1; i < times.size(); ++i) {
+    Require(times[i] > times[i - 1], fmt::format("timestamps must increase (frame {})", first_frame + i));
+  }
+  const FrameClock clock(first_frame, times);
   DenseTrajectory dense;
   dense.first_frame = first_frame;
   dense.world_from_camera.resize(n);
@@ -236,8 +259,8 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
   if (in_range.empty()) return dense;  // identities: nothing better is known
 
   const auto max_predicted = static_cast<size_t>(options.max_predicted_frames);
-  size_t next = 0;                         // the next estimated pose in in_range
-  const IndexedPose* last = nullptr;       // the last estimated pose before frame i
+  size_t next = 0;                    // the next estimated pose in in_range
+  const IndexedPose* last = nullptr;  // the last estimated pose before frame i
   const IndexedPose* before_last = nullptr;
   std::optional<GapBridge> bridge;  // set while frame i lies between two estimated frames
   for (size_t i = 0; i < n; ++i) {
@@ -261,22 +284,22 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
         const IndexedPose* after_end = next + 1 < in_range.size() ? in_range[next + 1] : nullptr;
         const size_t gap = gap_end.frame_index - last->frame_index - 1;
         bridge.emplace(*last, gap_end, before_last, after_end,
-                       gap <= static_cast<size_t>(options.max_velocity_bridge_frames));
+                       gap <= static_cast<size_t>(options.max_velocity_bridge_frames), clock);
       }
       dense.world_from_camera[i] = bridge->WorldFromCamera(frame);
       dense.source[i] = PoseSource::kInterpolated;
       continue;
     }
-    // After the last estimated frame, the tracker's motion model: the last step's motion, per frame, applied
-    // again for every frame since, up to max_predicted_frames; then held.
+    // After the last estimated frame, the tracker's motion model: the last step's motion, per frame (or second),
+    // carried on to each frame up to max_predicted_frames after it; then held.
     const size_t since = frame - last->frame_index;
-    const size_t steps = before_last == nullptr ? 0 : std::min(since, max_predicted);
+    const size_t horizon = last->frame_index + std::min(since, max_predicted);
     dense.world_from_camera[i] =
-        steps == 0 ? last->world_from_camera
-                   : last->world_from_camera *
-                         Rigid3d::Exp(TwistPerFrame(*before_last, *last) * static_cast<double>(steps));
-    dense.source[i] =
-        before_last != nullptr && since <= max_predicted ? PoseSource::kMotionModel : PoseSource::kHeld;
+        before_last == nullptr
+            ? last->world_from_camera
+            : last->world_from_camera *
+                  Rigid3d::Exp(Velocity(*before_last, *last, clock) * (clock(horizon) - clock(last->frame_index)));
+    dense.source[i] = before_last != nullptr && since <= max_predicted ? PoseSource::kMotionModel : PoseSource::kHeld;
   }
   return dense;
 }

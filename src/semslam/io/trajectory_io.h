@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "semslam/geometry/trajectory.h"
@@ -62,10 +63,12 @@ struct DenseTrajectory {
 };
 
 // A pose for every frame of [first_frame, end_frame) from the estimated ones (strictly increasing frame
-// indices; those outside the range are ignored), the gaps filled as PoseSource says. Throws InvalidArgument when
-// first_frame > end_frame or the poses are not in order.
+// indices; those outside the range are ignored), the gaps filled as PoseSource says. Motion is carried in
+// time: `times` holds the timestamps of the frames of the range (a camera that dropped frames jumps in time);
+// empty, the frames are evenly spaced. Throws InvalidArgument when first_frame > end_frame, the poses are not
+// in order, or the times are not one per frame, increasing.
 DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t first_frame, size_t end_frame,
-                              const DenseTrajectoryOptions& options = {});
+                              const DenseTrajectoryOptions& options = {}, std::span<const double> times = {});
 
 enum class TrajectoryFormat { kTum, kKitti };
 // Decides by the number of columns of the first data line (8: TUM, 12: KITTI).

@@ -14,8 +14,8 @@ std::vector<IndexedPose> MapFramePoses(const std::vector<FramePose>& frames) {
 }
 
 DenseTrajectory WriteKittiFrameTrajectory(const std::filesystem::path& path, const std::vector<FramePose>& frames,
-                                          size_t first_frame, size_t end_frame) {
-  DenseTrajectory dense = FillFrameGaps(MapFramePoses(frames), first_frame, end_frame);
+                                          size_t first_frame, size_t end_frame, std::span<const double> times) {
+  DenseTrajectory dense = FillFrameGaps(MapFramePoses(frames), first_frame, end_frame, {}, times);
   WriteKittiPoses(path, dense.world_from_camera);
   const size_t own = dense.Count(PoseSource::kEstimated);
   if (own == 0) {

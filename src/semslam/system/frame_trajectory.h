@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <span>
 #include <vector>
 
 #include "semslam/geo/frame_position.h"
@@ -15,8 +16,9 @@ namespace semslam {
 // The frames' own poses in the map the trajectory is written in, in frame order.
 std::vector<IndexedPose> MapFramePoses(const std::vector<FramePose>& frames);
 
-// Writes one line per frame of [first_frame, end_frame) to `path` and returns where each pose came from.
+// Writes one line per frame of [first_frame, end_frame) to `path` and returns where each pose came from;
+// `times`: those frames' timestamps (see FillFrameGaps).
 DenseTrajectory WriteKittiFrameTrajectory(const std::filesystem::path& path, const std::vector<FramePose>& frames,
-                                          size_t first_frame, size_t end_frame);
+                                          size_t first_frame, size_t end_frame, std::span<const double> times);
 
 }  // namespace semslam

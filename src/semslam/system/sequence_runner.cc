@@ -319,8 +319,10 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteFramesCsv(options.output / "frames.csv", slam);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
+  std::vector<double> frame_times;
+  for (size_t i = first; i < first + stats.frames; ++i) frame_times.push_back(sequence->Timestamp(i));
   const DenseTrajectory kitti = WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(),
-                                                          first, first + stats.frames);
+                                                          first, first + stats.frames, frame_times);
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
