@@ -320,9 +320,11 @@ AteResult ComputeAte(const Trajectory& estimate, const Trajectory& truth, Alignm
   return AteOfMatched(m, alignment);
 }
 
-Trajectory ReadSequenceGroundTruth(const fs::path& sequence, const std::string& camera) {
-  const std::unique_ptr<ImageSequence> opened = OpenSequence(sequence, {camera, false});
-  std::optional<Trajectory> truth = opened->GroundTruth();
+namespace {
+
+// The ground truth of an opened sequence folder; InputError naming the folder when its reader has none.
+Trajectory GroundTruthOf(const ImageSequence& opened, const fs::path& sequence) {
+  std::optional<Trajectory> truth = opened.GroundTruth();
   if (!truth) {
     throw InputError(sequence,
                      "the sequence has no ground truth (a KITTI odometry sequence needs "
@@ -331,11 +333,10 @@ Trajectory ReadSequenceGroundTruth(const fs::path& sequence, const std::string& 
   return std::move(*truth);
 }
 
-std::vector<double> ReadSequenceTimes(const fs::path& sequence, const std::string& camera) {
-  const std::unique_ptr<ImageSequence> opened = OpenSequence(sequence, {camera, false});
-  std::vector<double> times(opened->size());
-  for (size_t i = 0; i < times.size(); ++i) times[i] = opened->Timestamp(i);
-  return times;
+}  // namespace
+
+Trajectory ReadSequenceGroundTruth(const fs::path& sequence, const std::string& camera) {
+  return GroundTruthOf(*OpenSequence(sequence, {camera, false}), sequence);
 }
 
 ErrorSeries ComputeErrorSeries(const Trajectory& estimate, const Trajectory& truth, Alignment alignment,
@@ -387,11 +388,15 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
   const TrajectoryFormat estimate_format = DetectTrajectoryFormat(estimate);
   const TrajectoryFormat truth_format =
       truth_is_sequence ? TrajectoryFormat::kTum : DetectTrajectoryFormat(truth);
+  // A sequence folder as the truth is opened once, for its ground truth and, for a KITTI estimate, its stamps.
+  const std::unique_ptr<ImageSequence> sequence =
+      truth_is_sequence ? OpenSequence(truth, {truth_camera, false}) : nullptr;
   std::optional<std::vector<double>> stamps;
   if (times) {
     stamps = ReadTimes(*times);
-  } else if (truth_is_sequence && estimate_format == TrajectoryFormat::kKitti) {
-    stamps = ReadSequenceTimes(truth, truth_camera);  // line i is frame i of that sequence
+  } else if (sequence && estimate_format == TrajectoryFormat::kKitti) {
+    stamps.emplace(sequence->size());  // line i is frame i of that sequence
+    for (size_t i = 0; i < stamps->size(); ++i) (*stamps)[i] = sequence->Timestamp(i);
   } else if (estimate_format != truth_format) {
     const fs::path& kitti = estimate_format == TrajectoryFormat::kKitti ? estimate : truth;
     const fs::path& tum = estimate_format == TrajectoryFormat::kTum ? estimate : truth;
@@ -413,7 +418,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
       estimate_format == TrajectoryFormat::kKitti || truth_format == TrajectoryFormat::kKitti;
   size_t end = frames.end.value_or(available.value_or(0));
   if (uses_frames && available && end > *available) {
-    const fs::path source = truth_format == TrajectoryFormat::kKitti ? truth : times ? *times : truth;
+    const fs::path& source = truth_format == TrajectoryFormat::kKitti || !times ? truth : *times;
     throw InputError(source, fmt::format("{} asked, but it covers only {} frames", RangeText(first, end),
                                          *available));
   }
@@ -428,7 +433,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
                                  poses.begin() + static_cast<std::ptrdiff_t>(end));
     truth_trajectory = StampKittiPoses(poses, first, stamps);
   } else {
-    truth_trajectory = truth_is_sequence ? ReadSequenceGroundTruth(truth, truth_camera) : ReadTumTrajectory(truth);
+    truth_trajectory = sequence ? GroundTruthOf(*sequence, truth) : ReadTumTrajectory(truth);
   }
 
   Trajectory estimate_trajectory;

@@ -159,7 +159,5 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const std::filesystem::path& estima
 // The ground truth of a sequence folder (see EvaluateTrajectoryFiles). Throws InputError naming the folder
 // when its reader has none.
 Trajectory ReadSequenceGroundTruth(const std::filesystem::path& sequence, const std::string& camera = {});
-// The timestamps of a sequence folder's frames, in order.
-std::vector<double> ReadSequenceTimes(const std::filesystem::path& sequence, const std::string& camera = {});
 
 }  // namespace semslam
