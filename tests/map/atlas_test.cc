@@ -98,6 +98,14 @@ TEST(Atlas, AGapLinkStandsBetweenTheGoodKeyFramesForItsEnds) {
   EXPECT_EQ(edge->after, after);
   EXPECT_LT((edge->before_from_after.translation - after_from_before.Inverse().translation).norm(), 1e-12);
 
+  // A monocular loop that stretches the map around `before` twice as large stretches the link with it.
+  before->CorrectScale(2.0);
+  edge = ResolveGapLink(link);
+  ASSERT_TRUE(edge.has_value());
+  EXPECT_LT((edge->before_from_after.translation - 2.0 * after_from_before.Inverse().translation).norm(),
+            1e-12);
+  before->CorrectScale(0.5);
+
   // k0 and k2 stand in for the culled ends: k0_from_k2 = k0_from_before * before_from_after * after_from_k2.
   const Rigid3d expected = k0->camera_from_world() * before->world_from_camera() * after_from_before.Inverse() *
                            after->camera_from_world() * k2->world_from_camera();

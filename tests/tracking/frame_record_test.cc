@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "semslam/geometry/sim3.h"
 #include "semslam/map/map.h"
 #include "semslam/tracking/tracker.h"
 #include "support/kitti_camera.h"
@@ -50,6 +51,54 @@ TEST(FrameRecord, FollowsItsKeyFrameThroughCorrectionsAndCulling) {
   // Untracked frames have no pose.
   record.reference = nullptr;
   EXPECT_FALSE(CurrentCameraFromWorld(record).has_value());
+}
+
+// camera_from_world after the whole map is moved by new_from_old (a monocular merge or loop correction):
+// the pose keeps its rotation, and its translation is in the new units.
+Rigid3d Moved(const Rigid3d& camera_from_world, const Sim3d& new_from_old) {
+  const Sim3d moved = Sim3d(camera_from_world) * new_from_old.Inverse();
+  return Rigid3d(moved.rotation, moved.translation / moved.scale);
+}
+
+void MoveKeyFrame(KeyFrame* kf, const Sim3d& new_from_old) {
+  kf->SetPose(Moved(kf->camera_from_world(), new_from_old));
+  kf->CorrectScale(new_from_old.scale);
+}
+
+TEST(FrameRecord, StretchesWithItsKeyFrameWhenTheMapIsRescaled) {
+  Map map;
+  auto lock = map.WriteLock();
+  KeyFrame* kf0 = map.AddKeyFrame(FrameAt(0, {0, 0, 0}));
+  KeyFrame* kf1 = map.AddKeyFrame(FrameAt(3, {0, 0, 3}));
+  kf1->ChangeParent(kf0);
+  const Rigid3d camera_from_world = FrameAt(5, {0.2, 0, 5}).camera_from_world();
+  FrameRecord record;
+  record.reference = kf1;
+  record.camera_from_reference = camera_from_world * kf1->world_from_camera();
+  record.reference_scale = kf1->scale_correction();
+  const double offset = (camera_from_world.Inverse().translation - kf1->center()).norm();
+
+  // A merge moves the map 1.8 times larger: the frame is then 1.8 times as far from its keyframe.
+  const Sim3d merge(1.8, Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY())), {5, 0, -2});
+  MoveKeyFrame(kf0, merge);
+  MoveKeyFrame(kf1, merge);
+  Rigid3d expected = Moved(camera_from_world, merge);
+  ASSERT_TRUE(CurrentCameraFromWorld(record).has_value());
+  EXPECT_LT(Distance(*CurrentCameraFromWorld(record), expected), 1e-9);
+  EXPECT_NEAR((expected.Inverse().translation - kf1->center()).norm(), 1.8 * offset, 1e-9);
+  EXPECT_GT(offset, 1.0);
+
+  // Culled, the keyframe hands the frame to its parent, and a later correction of the parent stretches both
+  // offsets (frame to culled keyframe, culled keyframe to parent).
+  kf1->SetBad();
+  ASSERT_TRUE(kf1->is_bad());
+  const Sim3d loop(0.7, Eigen::Quaterniond(Eigen::AngleAxisd(-0.2, Eigen::Vector3d::UnitY())), {1, 0, 4});
+  MoveKeyFrame(kf0, loop);
+  MoveKeyFrame(kf1, loop);  // a culled keyframe follows its parent: correcting it too changes nothing
+  expected = Moved(expected, loop);
+  ASSERT_TRUE(CurrentCameraFromWorld(record).has_value());
+  EXPECT_LT(Distance(*CurrentCameraFromWorld(record), expected), 1e-9);
+  EXPECT_NEAR(kf1->scale_correction(), 1.8 * 0.7, 1e-12);
 }
 
 }  // namespace

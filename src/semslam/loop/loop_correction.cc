@@ -39,6 +39,7 @@ double LoopCloser::MoveMapToMatchedFrame(KeyFrame* current) {
   }
   for (KeyFrame* kf : map_.KeyFramesOfMap(from)) {
     kf->SetPose(RigidPose(Sim3d(kf->camera_from_world()) * current_map_from_into));
+    kf->CorrectScale(into_from_current_map.scale);
   }
   map_.MergeMapInto(from, into);
   spdlog::info("map {} moved into the frame of map {} (scale {:.3f}) and merged", from, into,
@@ -244,6 +245,8 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     const Sim3d camera_from_world = world_from_kf.Inverse();
     change[kf->id()] = {before[kf], world_from_kf};
     const_cast<KeyFrame*>(kf)->SetPose(RigidPose(camera_from_world));
+    // Its points move by world_from_kf * before: the map around it is stretched by the node's scale.
+    const_cast<KeyFrame*>(kf)->CorrectScale(world_from_kf.scale);
   }
   for (MapPoint* p : map_.MapPointsOfMap(current->map_id())) {
     if (p->is_bad()) continue;

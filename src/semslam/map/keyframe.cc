@@ -1,7 +1,9 @@
 #include "semslam/map/keyframe.h"
 
 #include <algorithm>
+#include <cmath>
 
+#include "semslam/core/error.h"
 #include "semslam/map/map_point.h"
 
 namespace semslam {
@@ -29,6 +31,25 @@ KeyFrame::KeyFrame(std::uint64_t id, const Frame& frame)
 void KeyFrame::SetPose(const Rigid3d& camera_from_world) {
   camera_from_world_ = camera_from_world;
   world_from_camera_ = camera_from_world.Inverse();
+}
+
+double KeyFrame::scale_correction() const {
+  if (!bad_ || parent_ == nullptr) return scale_correction_;
+  return scale_correction_ * parent_->scale_correction() / parent_scale_when_erased_;
+}
+
+void KeyFrame::CorrectScale(double scale) {
+  Require(std::isfinite(scale) && scale > 0.0, "keyframe: a scale correction must be positive");
+  if (!bad_) scale_correction_ *= scale;
+}
+
+Rigid3d KeyFrame::camera_from_parent() const {
+  if (parent_ == nullptr) return camera_from_parent_;
+  return Stretched(camera_from_parent_, parent_->scale_correction() / parent_scale_when_erased_);
+}
+
+Rigid3d Stretched(const Rigid3d& a_from_b, double scale) {
+  return Rigid3d(a_from_b.rotation, a_from_b.translation * scale);
 }
 
 void KeyFrame::EraseMapPoint(const MapPoint* point) {
@@ -216,6 +237,7 @@ void KeyFrame::SetBad() {
   if (parent_ != nullptr) {
     parent_->children_.erase(this);
     camera_from_parent_ = camera_from_world_ * parent_->world_from_camera();
+    parent_scale_when_erased_ = parent_->scale_correction();
   }
   bad_ = true;
 }

@@ -47,6 +47,12 @@ class KeyFrame {
   const Rigid3d& world_from_camera() const { return world_from_camera_; }
   Eigen::Vector3d center() const { return world_from_camera_.translation; }
   void SetPose(const Rigid3d& camera_from_world);
+  // How much the map's units around this keyframe have been stretched since it was made: a monocular loop
+  // or merge moves a neighbourhood by a Sim(3), and a pose kept relative to this keyframe (a frame's, a
+  // culled child's) must stretch with it. 1 until such a correction. A culled keyframe follows its parent
+  // (CorrectScale does nothing to it).
+  double scale_correction() const;
+  void CorrectScale(double scale);
 
   // Map point associations, one slot per keypoint (nullptr = none).
   const std::vector<MapPoint*>& map_points() const { return map_points_; }
@@ -82,8 +88,9 @@ class KeyFrame {
   void SetBad();
   // Marks the keyframe bad without touching the graph (the whole map is being reset).
   void MarkBadForReset() { bad_ = true; }
-  // Pose relative to the parent, kept when the keyframe is erased so trajectories can still be recovered.
-  const Rigid3d& camera_from_parent() const { return camera_from_parent_; }
+  // Pose relative to the parent, kept when the keyframe is erased so trajectories can still be recovered;
+  // in the parent's units as they are now (see scale_correction).
+  Rigid3d camera_from_parent() const;
 
   // Median depth of the observed points (for monocular scale and baselines); `q` = 2 gives the median.
   double SceneDepthQuantile(int q = 2) const;
@@ -148,6 +155,12 @@ class KeyFrame {
   bool not_erase_ = false;
   bool to_be_erased_ = false;
   Rigid3d camera_from_parent_;
+  // The parent's scale_correction() when camera_from_parent_ was taken.
+  double parent_scale_when_erased_ = 1.0;
+  double scale_correction_ = 1.0;
 };
+
+// `a_from_b` with its translation stretched by `scale` (a relative pose carried through a scale correction).
+Rigid3d Stretched(const Rigid3d& a_from_b, double scale);
 
 }  // namespace semslam

@@ -98,7 +98,9 @@ std::optional<GapEdge> ResolveGapLink(const GapLink& link) {
   const auto [before, before_from_link] = GoodAncestor(link.before);
   const auto [after, after_from_link] = GoodAncestor(link.after);
   if (before == nullptr || after == nullptr || before == after) return std::nullopt;
-  return GapEdge{before, after, before_from_link * link.after_from_before.Inverse() * after_from_link.Inverse()};
+  const Rigid3d after_from_before =
+      Stretched(link.after_from_before, link.before->scale_correction() / link.before_scale);
+  return GapEdge{before, after, before_from_link * after_from_before.Inverse() * after_from_link.Inverse()};
 }
 
 std::uint32_t Map::StartNewMap() {

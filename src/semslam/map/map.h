@@ -47,6 +47,7 @@ struct GapLink {
   KeyFrame* before = nullptr;
   KeyFrame* after = nullptr;
   Rigid3d after_from_before;  // in the lost map's units
+  double before_scale = 1.0;  // before->scale_correction() then (the link stretches with the map there)
 };
 
 // A gap link between the good keyframes standing for its two ends (each end itself, or the nearest good ancestor

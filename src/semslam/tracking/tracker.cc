@@ -130,6 +130,7 @@ void Tracker::Reset() {
     // it was left.
     last_tracked_reference_ = lost_map_->reference;
     last_tracked_camera_from_reference_ = lost_map_->camera_from_reference;
+    last_tracked_reference_scale_ = lost_map_->reference_scale;
     last_velocity_ = lost_map_->velocity;
     last_tracked_time_ = lost_map_->time;
     last_step_seconds_ = lost_map_->step_seconds;
@@ -163,12 +164,14 @@ std::pair<const KeyFrame*, Rigid3d> ResolveReference(const FrameRecord& record) 
   const KeyFrame* kf = record.reference;
   if (kf == nullptr) return {nullptr, {}};
   Rigid3d camera_from_kf = record.camera_from_reference;
+  double units = record.reference_scale;  // of camera_from_kf, in kf's scale_correction()
   while (kf->is_bad() && kf->parent() != nullptr) {
-    camera_from_kf = camera_from_kf * kf->camera_from_parent();
+    camera_from_kf = Stretched(camera_from_kf, kf->scale_correction() / units) * kf->camera_from_parent();
     kf = kf->parent();
+    units = kf->scale_correction();  // camera_from_parent() is in the parent's units as they are now
   }
   if (kf->is_bad()) return {nullptr, {}};
-  return {kf, camera_from_kf};
+  return {kf, Stretched(camera_from_kf, kf->scale_correction() / units)};
 }
 
 }  // namespace
@@ -246,11 +249,13 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     auto lock = map_.ReadLock();
     FollowMapChange(frame);
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
+    record.reference_scale = record.reference->scale_correction();
     result.camera_from_world = frame.camera_from_world();
     result.matched_points = inliers_;
     const bool previous_tracked = frames_since_tracked_ == 0 && last_tracked_reference_ != nullptr;
     last_tracked_reference_ = record.reference;
     last_tracked_camera_from_reference_ = record.camera_from_reference;
+    last_tracked_reference_scale_ = record.reference_scale;
     last_velocity_ = velocity_;
     if (previous_tracked) last_step_seconds_ = timestamp - last_tracked_time_;
     last_tracked_time_ = timestamp;
@@ -281,6 +286,11 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
       // keyframe, or the search below would start metres off (3.5 m errors at a corner of the city).
       const auto corrected = records_.empty() ? std::nullopt : CurrentCameraFromWorld(records_.back());
       if (last_frame_ && corrected) last_frame_->SetPose(*corrected);
+      // A monocular merge or loop may have rescaled the map there: the motion per frame stretches with it.
+      const KeyFrame* reference = records_.empty() ? nullptr : records_.back().reference;
+      if (velocity_ && reference != nullptr && !reference->is_bad()) {
+        velocity_ = Stretched(*velocity_, reference->scale_correction() / records_.back().reference_scale);
+      }
     }
     // Right after a relocalization the motion is unknown, unless it was a recovery (the mean motion over the
     // gap goes on).

@@ -109,13 +109,17 @@ struct FrameRecord {
   double timestamp = 0.0;
   KeyFrame* reference = nullptr;  // nullptr when the frame has no pose
   Rigid3d camera_from_reference;
+  // The reference's scale_correction() when camera_from_reference was taken: a monocular loop or merge that
+  // rescales the map around the keyframe rescales the frame's offset from it too.
+  double reference_scale = 1.0;
   PoseProvenance source = PoseProvenance::kNone;
 
   // A pose relative to a keyframe, as a record (to resolve it as the map stands now).
-  static FrameRecord At(KeyFrame* reference, const Rigid3d& camera_from_reference) {
+  static FrameRecord At(KeyFrame* reference, const Rigid3d& camera_from_reference, double reference_scale) {
     FrameRecord record;
     record.reference = reference;
     record.camera_from_reference = camera_from_reference;
+    record.reference_scale = reference_scale;
     return record;
   }
 };
@@ -186,7 +190,8 @@ class Tracker {
   double StepsSinceTracked(double timestamp, int frames) const;
   // The last tracked frame's pose, as a record.
   FrameRecord LastTracked() const {
-    return FrameRecord::At(last_tracked_reference_, last_tracked_camera_from_reference_);
+    return FrameRecord::At(last_tracked_reference_, last_tracked_camera_from_reference_,
+                           last_tracked_reference_scale_);
   }
   // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking
   // lock was released: the frame follows its reference keyframe. Call under a map lock.
@@ -247,6 +252,7 @@ class Tracker {
   std::optional<double> lost_since_;
   KeyFrame* last_tracked_reference_ = nullptr;
   Rigid3d last_tracked_camera_from_reference_;
+  double last_tracked_reference_scale_ = 1.0;
   std::optional<Rigid3d> last_velocity_;
   double last_tracked_time_ = 0.0;
   double last_step_seconds_ = 0.0;  // between the last two tracked frames: the time last_velocity_ covers
@@ -256,12 +262,15 @@ class Tracker {
   struct LostMap {
     KeyFrame* reference = nullptr;
     Rigid3d camera_from_reference;
+    double reference_scale = 1.0;
     std::optional<Rigid3d> velocity;
     double time = 0.0;
     double step_seconds = 0.0;
     size_t record_index = 0;
 
-    FrameRecord last_tracked() const { return FrameRecord::At(reference, camera_from_reference); }
+    FrameRecord last_tracked() const {
+      return FrameRecord::At(reference, camera_from_reference, reference_scale);
+    }
   };
   std::optional<LostMap> lost_map_;
 

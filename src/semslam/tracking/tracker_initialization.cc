@@ -192,6 +192,7 @@ void Tracker::PoseInitializationFrames(KeyFrame* first, KeyFrame* second) {
     const auto it = tracked.find(record.frame_id);
     record.reference = first;
     record.camera_from_reference = it != tracked.end() ? it->second : interpolated(record.timestamp);
+    record.reference_scale = first->scale_correction();
     record.source = (record.frame_id == first->frame_id() || it != tracked.end()) ? PoseProvenance::kTracked
                                                                                   : PoseProvenance::kInterpolated;
   }

@@ -34,10 +34,13 @@ void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
     new_map = map_.StartNewMap();
   }
   if (last_tracked_reference_ != nullptr) {
-    lost_map_ =
-        LostMap{last_tracked_reference_, last_tracked_camera_from_reference_,
-                last_velocity_,          last_tracked_time_,
-                last_step_seconds_,      records_.size() - 1 - static_cast<size_t>(frames_since_tracked_)};
+    lost_map_ = LostMap{last_tracked_reference_,
+                        last_tracked_camera_from_reference_,
+                        last_tracked_reference_scale_,
+                        last_velocity_,
+                        last_tracked_time_,
+                        last_step_seconds_,
+                        records_.size() - 1 - static_cast<size_t>(frames_since_tracked_)};
   }
   spdlog::warn(
       "frame {}: lost for {:.1f} s without relocalizing; map {} is kept and map {} starts (until it "
@@ -76,7 +79,7 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
   const Rigid3d after_from_before = CarryMotion(
       *lost_map_->velocity, MotionSteps(lost_map_->time, after->timestamp(), lost_map_->step_seconds, 0),
       kMaxPredictedSteps, *CurrentCameraFromWorld(last) * before->world_from_camera());
-  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before});
+  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before, before->scale_correction()});
   spdlog::info(
       "map {}'s first keyframe (frame {}) is linked to keyframe {} (frame {}) of map {} by the motion before "
       "the loss over {:.1f} s: {:.2f} apart, turned {:.1f} deg",
@@ -95,6 +98,7 @@ void Tracker::PredictPose(FrameRecord& record, int frames) const {
       last_velocity_ ? CarryMotion(*last_velocity_, StepsSinceTracked(record.timestamp, frames),
                                    kMaxPredictedSteps, last_tracked_camera_from_reference_)
                      : last_tracked_camera_from_reference_;
+  record.reference_scale = last_tracked_reference_scale_;
   record.source = PoseProvenance::kPredicted;
 }
 
