@@ -21,17 +21,28 @@ double Distance(const Rigid3d& a, const Rigid3d& b) {
   return (a.translation - b.translation).norm() + a.rotation.angularDistance(b.rotation);
 }
 
-TEST(FrameRecord, FollowsItsKeyFrameThroughCorrectionsAndCulling) {
+// Two keyframes (kf1 the child of kf0) and frame 5 recorded relative to kf1.
+class FrameRecordTest : public ::testing::Test {
+ protected:
+  FrameRecordTest() : lock(map.WriteLock()) {
+    kf0 = map.AddKeyFrame(FrameAt(0, {0, 0, 0}));
+    kf1 = map.AddKeyFrame(FrameAt(3, {0, 0, 3}));
+    kf1->ChangeParent(kf0);
+    record.frame_id = 5;
+    record.reference = kf1;
+    record.camera_from_reference = camera_from_world * kf1->world_from_camera();
+    record.reference_scale = kf1->scale_correction();
+  }
+
   Map map;
-  auto lock = map.WriteLock();
-  KeyFrame* kf0 = map.AddKeyFrame(FrameAt(0, {0, 0, 0}));
-  KeyFrame* kf1 = map.AddKeyFrame(FrameAt(3, {0, 0, 3}));
-  kf1->ChangeParent(kf0);
+  std::unique_lock<std::shared_mutex> lock;
+  KeyFrame* kf0 = nullptr;
+  KeyFrame* kf1 = nullptr;
   const Rigid3d camera_from_world = FrameAt(5, {0.2, 0, 5}).camera_from_world();
   FrameRecord record;
-  record.frame_id = 5;
-  record.reference = kf1;
-  record.camera_from_reference = camera_from_world * kf1->world_from_camera();
+};
+
+TEST_F(FrameRecordTest, FollowsItsKeyFrameThroughCorrectionsAndCulling) {
   ASSERT_TRUE(CurrentCameraFromWorld(record).has_value());
   EXPECT_LT(Distance(*CurrentCameraFromWorld(record), camera_from_world), 1e-12);
 
@@ -65,17 +76,7 @@ void MoveKeyFrame(KeyFrame* kf, const Sim3d& new_from_old) {
   kf->CorrectScale(new_from_old.scale);
 }
 
-TEST(FrameRecord, StretchesWithItsKeyFrameWhenTheMapIsRescaled) {
-  Map map;
-  auto lock = map.WriteLock();
-  KeyFrame* kf0 = map.AddKeyFrame(FrameAt(0, {0, 0, 0}));
-  KeyFrame* kf1 = map.AddKeyFrame(FrameAt(3, {0, 0, 3}));
-  kf1->ChangeParent(kf0);
-  const Rigid3d camera_from_world = FrameAt(5, {0.2, 0, 5}).camera_from_world();
-  FrameRecord record;
-  record.reference = kf1;
-  record.camera_from_reference = camera_from_world * kf1->world_from_camera();
-  record.reference_scale = kf1->scale_correction();
+TEST_F(FrameRecordTest, StretchesWithItsKeyFrameWhenTheMapIsRescaled) {
   const double offset = (camera_from_world.Inverse().translation - kf1->center()).norm();
 
   // A merge moves the map 1.8 times larger: the frame is then 1.8 times as far from its keyframe.
