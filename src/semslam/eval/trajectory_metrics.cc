@@ -395,8 +395,7 @@ TrajectoryEvaluation EvaluateTrajectoryFiles(const fs::path& estimate, const fs:
   if (times) {
     stamps = ReadTimes(*times);
   } else if (sequence && estimate_format == TrajectoryFormat::kKitti) {
-    stamps.emplace(sequence->size());  // line i is frame i of that sequence
-    for (size_t i = 0; i < stamps->size(); ++i) (*stamps)[i] = sequence->Timestamp(i);
+    stamps = FrameTimestamps(*sequence, 0, sequence->size());  // line i is frame i of that sequence
   } else if (estimate_format != truth_format) {
     const fs::path& kitti = estimate_format == TrajectoryFormat::kKitti ? estimate : truth;
     const fs::path& tum = estimate_format == TrajectoryFormat::kTum ? estimate : truth;

@@ -110,4 +110,8 @@ Rigid3d Interpolate(const Rigid3d& a, const Rigid3d& b, double alpha) {
   return Rigid3d(a.rotation.slerp(alpha, b.rotation), (1.0 - alpha) * a.translation + alpha * b.translation);
 }
 
+Rigid3d Stretched(const Rigid3d& a_from_b, double scale) {
+  return Rigid3d(a_from_b.rotation, a_from_b.translation * scale);
+}
+
 }  // namespace semslam

@@ -39,4 +39,8 @@ Eigen::Vector3d QuaternionLog(const Eigen::Quaterniond& q);
 // Geodesic interpolation: alpha = 0 gives a, alpha = 1 gives b.
 Rigid3d Interpolate(const Rigid3d& a, const Rigid3d& b, double alpha);
 
+// `a_from_b` with its translation stretched by `scale`: a relative pose carried into units `scale` times larger
+// (a monocular map rescaled around it).
+Rigid3d Stretched(const Rigid3d& a_from_b, double scale);
+
 }  // namespace semslam

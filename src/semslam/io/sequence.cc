@@ -257,6 +257,13 @@ constexpr char kExpected[] =
 
 }  // namespace
 
+std::vector<double> FrameTimestamps(const ImageSequence& sequence, size_t first, size_t end) {
+  std::vector<double> times;
+  times.reserve(end - first);
+  for (size_t i = first; i < end; ++i) times.push_back(sequence.Timestamp(i));
+  return times;
+}
+
 std::unique_ptr<ImageSequence> OpenSequence(const fs::path& path, const SequenceOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, fmt::format("not found; {}", kExpected));

@@ -6,6 +6,7 @@
 #include <opencv2/core/mat.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "semslam/geometry/camera.h"
 #include "semslam/geometry/trajectory.h"
@@ -62,6 +63,8 @@ class ImageSequence {
 // have).
 std::unique_ptr<ImageSequence> OpenSequence(const std::filesystem::path& path,
                                             const SequenceOptions& options = {});
+// The timestamps of frames [first, end) of a sequence, in order.
+std::vector<double> FrameTimestamps(const ImageSequence& sequence, size_t first, size_t end);
 
 // Reads an image as 8 bits (16-bit images are scaled), grey or BGR (an alpha channel is dropped). Throws
 // InputError naming the file if it is missing or cannot be decoded.

@@ -48,10 +48,6 @@ Rigid3d KeyFrame::camera_from_parent() const {
   return Stretched(camera_from_parent_, parent_->scale_correction() / parent_scale_when_erased_);
 }
 
-Rigid3d Stretched(const Rigid3d& a_from_b, double scale) {
-  return Rigid3d(a_from_b.rotation, a_from_b.translation * scale);
-}
-
 void KeyFrame::EraseMapPoint(const MapPoint* point) {
   const int index = point->IndexIn(this);
   if (index >= 0 && map_points_[static_cast<size_t>(index)] == point) {

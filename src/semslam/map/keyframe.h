@@ -160,7 +160,4 @@ class KeyFrame {
   double scale_correction_ = 1.0;
 };
 
-// `a_from_b` with its translation stretched by `scale` (a relative pose carried through a scale correction).
-Rigid3d Stretched(const Rigid3d& a_from_b, double scale);
-
 }  // namespace semslam

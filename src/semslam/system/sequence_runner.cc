@@ -141,13 +141,6 @@ void WarnAboutInitialization(long long first_tracked, size_t first, size_t end) 
   }
 }
 
-std::vector<double> FrameTimes(const ImageSequence& sequence, size_t first, size_t end) {
-  std::vector<double> times;
-  times.reserve(end - first);
-  for (size_t i = first; i < end; ++i) times.push_back(sequence.Timestamp(i));
-  return times;
-}
-
 // The ground truth over the frames that were run (path_length_m is the length of the drive that was run, not
 // of the whole sequence); nullopt when it has fewer than two poses there.
 std::optional<Trajectory> TruthOverFrames(const Trajectory& truth, double first_time, double last_time) {
@@ -226,7 +219,7 @@ RunSummary RunSequence(const RunOptions& options) {
   if (!options.gps.empty()) {
     gps_log = ReadGps(options.gps);
     LogSkippedFixes(*gps_log);
-    CheckGpsLog(*gps_log, FrameTimes(*sequence, first, end));
+    CheckGpsLog(*gps_log, FrameTimestamps(*sequence, first, end));
   }
   std::optional<std::vector<Landmark>> catalogue;
   if (!options.landmarks.empty()) {
@@ -319,10 +312,9 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteFramesCsv(options.output / "frames.csv", slam);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
-  std::vector<double> frame_times;
-  for (size_t i = first; i < first + stats.frames; ++i) frame_times.push_back(sequence->Timestamp(i));
-  const DenseTrajectory kitti = WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(),
-                                                          first, first + stats.frames, frame_times);
+  const DenseTrajectory kitti =
+      WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(), first, first + stats.frames,
+                                FrameTimestamps(*sequence, first, first + stats.frames));
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 

@@ -119,20 +119,17 @@ void Tracker::Reset() {
   ForgetTrackingState();
   init_frame_.reset();
   init_between_frames_.clear();
-  last_tracked_reference_ = nullptr;
+  last_tracked_.reference = nullptr;
   last_velocity_.reset();
   const bool lost_map_kept = lost_map_ && [&] {
     auto lock = map_.ReadLock();
-    return CurrentReference(lost_map_->last_tracked()) != nullptr;  // the keyframe, or a good ancestor of it
+    return CurrentReference(lost_map_->last_tracked) != nullptr;  // the keyframe, or a good ancestor of it
   }();
   if (lost_map_kept) {
     // The map given up was the one started after a loss: the lost map is searched again first, from where
     // it was left.
-    last_tracked_reference_ = lost_map_->reference;
-    last_tracked_camera_from_reference_ = lost_map_->camera_from_reference;
-    last_tracked_reference_scale_ = lost_map_->reference_scale;
+    last_tracked_ = lost_map_->last_tracked;
     last_velocity_ = lost_map_->velocity;
-    last_tracked_time_ = lost_map_->time;
     last_step_seconds_ = lost_map_->step_seconds;
     frames_since_tracked_ = static_cast<int>(records_.size() - 1 - lost_map_->record_index);
   } else {
@@ -207,7 +204,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     if (recovering) {
       auto lock = map_.ReadLock();
       spdlog::info("frame {}: map {} found again after {:.1f} s; no new map needed", frame.id(),
-                   reference_keyframe_->map_id(), timestamp - lost_map_->time);
+                   reference_keyframe_->map_id(), timestamp - lost_map_->last_tracked.timestamp);
       lost_map_.reset();
     }
   } else if (recovering) {
@@ -252,13 +249,10 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     record.reference_scale = record.reference->scale_correction();
     result.camera_from_world = frame.camera_from_world();
     result.matched_points = inliers_;
-    const bool previous_tracked = frames_since_tracked_ == 0 && last_tracked_reference_ != nullptr;
-    last_tracked_reference_ = record.reference;
-    last_tracked_camera_from_reference_ = record.camera_from_reference;
-    last_tracked_reference_scale_ = record.reference_scale;
+    const bool previous_tracked = frames_since_tracked_ == 0 && last_tracked_.reference != nullptr;
+    if (previous_tracked) last_step_seconds_ = timestamp - last_tracked_.timestamp;
+    last_tracked_ = record;
     last_velocity_ = velocity_;
-    if (previous_tracked) last_step_seconds_ = timestamp - last_tracked_time_;
-    last_tracked_time_ = timestamp;
     frames_since_tracked_ = 0;
   } else {
     ++frames_since_tracked_;

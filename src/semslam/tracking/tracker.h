@@ -113,15 +113,6 @@ struct FrameRecord {
   // rescales the map around the keyframe rescales the frame's offset from it too.
   double reference_scale = 1.0;
   PoseProvenance source = PoseProvenance::kNone;
-
-  // A pose relative to a keyframe, as a record (to resolve it as the map stands now).
-  static FrameRecord At(KeyFrame* reference, const Rigid3d& camera_from_reference, double reference_scale) {
-    FrameRecord record;
-    record.reference = reference;
-    record.camera_from_reference = camera_from_reference;
-    record.reference_scale = reference_scale;
-    return record;
-  }
 };
 
 // The frame's pose in its map as it stands now (through its reference keyframe, or the nearest parent of a
@@ -188,11 +179,6 @@ class Tracker {
   // Steps of the last motion from the last tracked frame to one at `timestamp`, `frames` later: by the clock
   // (dropped frames leave a gap in time), else by frames.
   double StepsSinceTracked(double timestamp, int frames) const;
-  // The last tracked frame's pose, as a record.
-  FrameRecord LastTracked() const {
-    return FrameRecord::At(last_tracked_reference_, last_tracked_camera_from_reference_,
-                           last_tracked_reference_scale_);
-  }
   // The map moved (a loop correction, a merge, a global BA) after this frame was tracked, once the tracking
   // lock was released: the frame follows its reference keyframe. Call under a map lock.
   void FollowMapChange(Frame& frame) const;
@@ -250,27 +236,17 @@ class Tracker {
   // Since when tracking is lost (timestamp of the first lost frame), and the last tracked frame's pose and
   // motion, from which lost frames are predicted.
   std::optional<double> lost_since_;
-  KeyFrame* last_tracked_reference_ = nullptr;
-  Rigid3d last_tracked_camera_from_reference_;
-  double last_tracked_reference_scale_ = 1.0;
+  FrameRecord last_tracked_;  // its reference is nullptr while no frame was tracked
   std::optional<Rigid3d> last_velocity_;
-  double last_tracked_time_ = 0.0;
   double last_step_seconds_ = 0.0;  // between the last two tracked frames: the time last_velocity_ covers
   int frames_since_tracked_ = 0;
   // Where tracking was in the map lost for good, while the map after it has not started (or was given up
   // young): relocalization there comes first. `record_index` is the last tracked frame's record.
   struct LostMap {
-    KeyFrame* reference = nullptr;
-    Rigid3d camera_from_reference;
-    double reference_scale = 1.0;
+    FrameRecord last_tracked;
     std::optional<Rigid3d> velocity;
-    double time = 0.0;
     double step_seconds = 0.0;
     size_t record_index = 0;
-
-    FrameRecord last_tracked() const {
-      return FrameRecord::At(reference, camera_from_reference, reference_scale);
-    }
   };
   std::optional<LostMap> lost_map_;
 

@@ -33,13 +33,8 @@ void Tracker::StartNewMap(Frame& frame, TrackingResult& result) {
     old_map = map_.active_map_id();
     new_map = map_.StartNewMap();
   }
-  if (last_tracked_reference_ != nullptr) {
-    lost_map_ = LostMap{last_tracked_reference_,
-                        last_tracked_camera_from_reference_,
-                        last_tracked_reference_scale_,
-                        last_velocity_,
-                        last_tracked_time_,
-                        last_step_seconds_,
+  if (last_tracked_.reference != nullptr) {
+    lost_map_ = LostMap{last_tracked_, last_velocity_, last_step_seconds_,
                         records_.size() - 1 - static_cast<size_t>(frames_since_tracked_)};
   }
   spdlog::warn(
@@ -66,18 +61,18 @@ bool Tracker::InitializeMap(Frame& frame) {
 void Tracker::LinkNewMapToLostMap(const Frame& frame) {
   auto lock = map_.WriteLock();
   KeyFrame* after = new_keyframes_.empty() ? nullptr : map_.KeyFrameById(new_keyframes_.front().keyframe_id);
-  const FrameRecord last = lost_map_->last_tracked();
+  const FrameRecord& last = lost_map_->last_tracked;
   const KeyFrame* before = CurrentReference(last);
   spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
                frame.id(), map_.active_map_id(),
-               before != nullptr ? before->map_id() : lost_map_->reference->map_id());
+               before != nullptr ? before->map_id() : last.reference->map_id());
   if (after == nullptr || before == nullptr || !lost_map_->velocity || !(lost_map_->step_seconds > 0.0))
     return;
   // Where the motion before the loss puts the new map's first keyframe, relative to the last keyframe
   // tracked.
-  const double seconds = after->timestamp() - lost_map_->time;
+  const double seconds = after->timestamp() - last.timestamp;
   const Rigid3d after_from_before = CarryMotion(
-      *lost_map_->velocity, MotionSteps(lost_map_->time, after->timestamp(), lost_map_->step_seconds, 0),
+      *lost_map_->velocity, MotionSteps(last.timestamp, after->timestamp(), lost_map_->step_seconds, 0),
       kMaxPredictedSteps, *CurrentCameraFromWorld(last) * before->world_from_camera());
   map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before, before->scale_correction()});
   spdlog::info(
@@ -88,17 +83,17 @@ void Tracker::LinkNewMapToLostMap(const Frame& frame) {
 }
 
 double Tracker::StepsSinceTracked(double timestamp, int frames) const {
-  return MotionSteps(last_tracked_time_, timestamp, last_step_seconds_, frames);
+  return MotionSteps(last_tracked_.timestamp, timestamp, last_step_seconds_, frames);
 }
 
 void Tracker::PredictPose(FrameRecord& record, int frames) const {
-  if (last_tracked_reference_ == nullptr) return;
-  record.reference = last_tracked_reference_;
+  if (last_tracked_.reference == nullptr) return;
+  record.reference = last_tracked_.reference;
   record.camera_from_reference =
       last_velocity_ ? CarryMotion(*last_velocity_, StepsSinceTracked(record.timestamp, frames),
-                                   kMaxPredictedSteps, last_tracked_camera_from_reference_)
-                     : last_tracked_camera_from_reference_;
-  record.reference_scale = last_tracked_reference_scale_;
+                                   kMaxPredictedSteps, last_tracked_.camera_from_reference)
+                     : last_tracked_.camera_from_reference;
+  record.reference_scale = last_tracked_.reference_scale;
   record.source = PoseProvenance::kPredicted;
 }
 
@@ -113,7 +108,7 @@ bool Tracker::Relocalize(Frame& frame) {
   // it may be anywhere in any map.
   // The frame being relocalized is not counted in frames_since_tracked_ yet.
   const int frames_since_tracked = frames_since_tracked_ + 1;
-  const FrameRecord last = LastTracked();
+  const FrameRecord last = last_tracked_;
   const KeyFrame* last_reference = CurrentReference(last);
   if (last_reference != nullptr) {
     relocalization.map_id = last_reference->map_id();
