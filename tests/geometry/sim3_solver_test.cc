@@ -133,5 +133,31 @@ TEST(Sim3Ransac, BadInputThrows) {
   EXPECT_THROW(EstimateSim3Ransac(m.correspondences, options), InvalidArgument);
 }
 
+// Two keyframes taken from the same spot: reprojection cannot tell the true similarity from one whose scale
+// (and translation) shrank to almost nothing, the 3D points can.
+TEST(MedianDepthRatio, TellsACollapsedScaleThatReprojectionCannot) {
+  const Sim3d truth(1.3, kTruth.rotation, Eigen::Vector3d::Zero());
+  const Sim3d collapsed(0.001, kTruth.rotation, Eigen::Vector3d::Zero());
+  const Matches m = MakeMatches(truth, 100, 0.2, 9);
+  std::vector<bool> inliers;
+  const int true_inliers = ClassifySim3Inliers(truth, m.correspondences, 9.21, &inliers);
+  EXPECT_EQ(ClassifySim3Inliers(collapsed, m.correspondences, 9.21, &inliers), true_inliers);
+  EXPECT_NEAR(MedianDepthRatio(truth, m.correspondences.points1, m.correspondences.points2), 1.0, 0.05);
+  EXPECT_GT(MedianDepthRatio(collapsed, m.correspondences.points1, m.correspondences.points2), 1000.0);
+  const Sim3d too_large(2.6, kTruth.rotation, Eigen::Vector3d::Zero());
+  EXPECT_NEAR(MedianDepthRatio(too_large, m.correspondences.points1, m.correspondences.points2), 0.5, 0.05);
+}
+
+TEST(MedianDepthRatio, BadInputThrows) {
+  const Matches m = MakeMatches(kTruth, 10, 0.0, 10);
+  Points3d points2 = m.correspondences.points2;
+  points2.pop_back();
+  EXPECT_THROW(MedianDepthRatio(kTruth, m.correspondences.points1, points2), InvalidArgument);
+  EXPECT_THROW(MedianDepthRatio(kTruth, {}, {}), InvalidArgument);
+  points2 = m.correspondences.points2;
+  points2[3].x() = std::nan("");
+  EXPECT_THROW(MedianDepthRatio(kTruth, m.correspondences.points1, points2), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace semslam

@@ -234,4 +234,21 @@ std::optional<Sim3RansacResult> EstimateSim3Ransac(const Sim3Correspondences& c,
   return result;
 }
 
+double MedianDepthRatio(const Sim3d& camera1_from_camera2, const Points3d& points1, const Points3d& points2) {
+  Require(!points1.empty() && points1.size() == points2.size(),
+          fmt::format("median depth ratio: {} and {} points, need as many of each and at least one", points1.size(),
+                      points2.size()));
+  std::vector<double> ratios;
+  ratios.reserve(points1.size());
+  for (size_t i = 0; i < points1.size(); ++i) {
+    Require(points1[i].allFinite() && points2[i].allFinite(),
+            fmt::format("median depth ratio: point pair {} is not finite", i));
+    const double mapped = (camera1_from_camera2 * points2[i]).norm();
+    ratios.push_back(mapped > 0.0 ? points1[i].norm() / mapped : std::numeric_limits<double>::infinity());
+  }
+  const auto middle = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
+  std::nth_element(ratios.begin(), middle, ratios.end());
+  return *middle;
+}
+
 }  // namespace semslam

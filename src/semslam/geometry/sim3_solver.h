@@ -58,4 +58,11 @@ std::optional<Sim3RansacResult> EstimateSim3Ransac(const Sim3Correspondences& co
 int ClassifySim3Inliers(const Sim3d& camera1_from_camera2, const Sim3Correspondences& correspondences,
                         double chi2_threshold, std::vector<bool>* inliers);
 
+// The scale a transform leaves between two views' own 3D points: the median over the matches of
+// |point1| / |camera1_from_camera2 * point2|, distances from camera 1 (about 1 when it aligns the two
+// structures). Reprojection alone does not hold it where the two cameras stand close together: a similarity
+// whose scale and translation shrink together moves no projection, and a refinement on reprojection can drift
+// to a scale near 0. Throws InvalidArgument for no matches, mismatched sizes or non-finite points.
+double MedianDepthRatio(const Sim3d& camera1_from_camera2, const Points3d& points1, const Points3d& points2);
+
 }  // namespace semslam

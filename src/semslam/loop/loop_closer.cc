@@ -34,6 +34,7 @@ void LoopCloserOptions::Check() const {
   Require(global_ba_window_keyframes >= 2, "loop closer: global_ba_window_keyframes must be >= 2");
   Require(min_verified_neighbours >= 0 && min_verified_neighbours <= 5 && verification_matches >= 3,
           "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
+  Require(max_depth_ratio > 1.0, "loop closer: max_depth_ratio must be > 1");
   Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,
           "loop closer: max_stereo_correction_ratio must be positive and stereo_correction_slack_m >= 0");
   Require(stereo_rotation_slack_deg >= 0 && max_stereo_rotation_deg_per_100m >= 0 &&
@@ -298,6 +299,7 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     const int inliers =
         RefineSim3(*current, *candidate, guided, &current_from_candidate, 10.0, options_.fix_scale);
     if (inliers < options_.min_sim3_inliers) continue;
+    if (!AgreesWithStructure(*current, *candidate, guided, current_from_candidate)) continue;
 
     matched_keyframe_ = candidate;
     current_from_world_ = current_from_candidate * Sim3d(candidate->camera_from_world());
@@ -336,6 +338,28 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     }
   }
   return false;
+}
+
+bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& candidate,
+                                     const std::vector<MapPoint*>& matches,
+                                     const Sim3d& current_from_candidate) const {
+  Points3d points_current, points_candidate;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    const MapPoint* p1 = current.map_point(static_cast<int>(i));
+    const MapPoint* p2 = matches[i];
+    if (p1 == nullptr || p2 == nullptr || p1->is_bad() || p2->is_bad()) continue;
+    points_current.push_back(current.camera_from_world() * p1->position());
+    points_candidate.push_back(candidate.camera_from_world() * p2->position());
+  }
+  if (points_current.empty()) return false;
+  const double ratio = MedianDepthRatio(current_from_candidate, points_current, points_candidate);
+  const bool agrees = ratio <= options_.max_depth_ratio && ratio * options_.max_depth_ratio >= 1.0;
+  spdlog::info(
+      "loop candidate: keyframe {} with keyframe {}: its transform (scale {:.3f}) puts the matched points at {:.2f} "
+      "times their own depth (limit {:.2f}){}",
+      current.id(), candidate.id(), current_from_candidate.scale, 1.0 / ratio, options_.max_depth_ratio,
+      agrees ? "" : "; refused");
+  return agrees;
 }
 
 bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const {

@@ -51,6 +51,11 @@ struct LoopCloserOptions {
   // one view, not with the views around it.
   int min_verified_neighbours = 2;
   int verification_matches = 20;
+  // The refined transform must agree with both keyframes' own 3D points: the median depth of the matched
+  // points it maps into the current keyframe within this factor of their own (MedianDepthRatio). Reprojection
+  // leaves the scale free where the two keyframes stand close together, and a merge refined to scale 0.000
+  // collapsed a whole map onto a point (the cut KITTI drive, one core busy).
+  double max_depth_ratio = 1.5;
   // Stereo only (a metric map, whose odometry drifts by a fraction of a percent): a loop within one map may
   // move the current keyframe by at most this share of the odometry between it and the matched keyframe
   // (the shortest chain of essential-graph links, see KeyFrameGraphDistance), plus
@@ -127,6 +132,10 @@ class LoopCloser {
   bool ComputeSim3(KeyFrame* current);
   // How many of the current keyframe's best covisibles find loop_points_ where current_from_world_ puts them.
   int CountVerifiedNeighbours(const KeyFrame* current) const;
+  // Whether the refined transform agrees with both keyframes' 3D points (options_.max_depth_ratio); `matches`
+  // holds the candidate's point for each of the current keyframe's features, or nullptr.
+  bool AgreesWithStructure(const KeyFrame& current, const KeyFrame& candidate,
+                           const std::vector<MapPoint*>& matches, const Sim3d& current_from_candidate) const;
   bool CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const;
   // Moves the current keyframe's map into the matched keyframe's frame (write lock held); returns the
   // event's scale.
