@@ -65,6 +65,9 @@ TEST(LoopBounds, CheckRefusesBoundsThatMeanNothing) {
   options.stereo_rotation_slack_deg = 5.0;
   options.max_stereo_rotation_deg_per_100m = -0.1;
   EXPECT_THROW(options.Check(), InvalidArgument);
+  options.max_stereo_rotation_deg_per_100m = 2.0;
+  options.max_depth_ratio = 1.0;  // no transform's depths agree with the points' exactly
+  EXPECT_THROW(options.Check(), InvalidArgument);
 }
 
 }  // namespace
