@@ -110,8 +110,25 @@ TEST(FillFrameGaps, LongGapsAreBridgedAlongTheGeodesic) {
   DenseTrajectoryOptions long_gap;
   long_gap.max_velocity_bridge_frames = 8;  // the gap holds 9 frames
   EXPECT_NEAR(FillFrameGaps(estimated, 0, 13, long_gap).world_from_camera[6].translation.z(), 1.5, 1e-12);
-  // Defaults: from frame 1 at 1 per frame (6 at frame 6), from frame 11 standing (2), halfway between.
-  EXPECT_NEAR(FillFrameGaps(estimated, 0, 13).world_from_camera[6].translation.z(), 4.0, 1e-12);
+  // Defaults: the car slows steadily from 1 per frame (frames 0-1) to standing (frames 11-12). Carried from
+  // frame 1 it is at 6 - 15/11 at frame 6, carried back from frame 11 at 7/11; halfway between.
+  EXPECT_NEAR(FillFrameGaps(estimated, 0, 13).world_from_camera[6].translation.z(), 29.0 / 11.0, 1e-12);
+}
+
+TEST(FillFrameGaps, ASteadilyAcceleratingDriveIsBridgedExactly) {
+  // Straight ahead, speeding up by 0.01 per frame per frame (the synthetic city's cars do), lost for 20 frames:
+  // the constant velocities of the two ends, blended, fell 0.5 behind the car in the middle of the gap.
+  const auto pose = [](size_t frame) {
+    const double t = static_cast<double>(frame);
+    return Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, 0.78 * t + 0.005 * t * t));
+  };
+  std::vector<IndexedPose> estimated;
+  for (const size_t f : {8, 9, 30, 31}) estimated.push_back({f, pose(f)});
+  const DenseTrajectory dense = FillFrameGaps(estimated, 8, 32);
+  for (size_t f = 10; f < 30; ++f) {
+    EXPECT_EQ(dense.source[f - 8], PoseSource::kInterpolated) << f;
+    ExpectSamePose(dense.world_from_camera[f - 8], pose(f), 1e-9, f);
+  }
 }
 
 TEST(FillFrameGaps, MotionIsCarriedInTimeOverDroppedFrames) {

@@ -199,35 +199,65 @@ Eigen::Vector6d Velocity(const IndexedPose& earlier, const IndexedPose& later, c
   return (earlier.world_from_camera.Inverse() * later.world_from_camera).Log() / elapsed;
 }
 
-// A gap between the estimated frames `start` and `end`: each end's constant-velocity prediction (its velocity
-// from its estimated neighbour outside the gap, or the gap's own mean motion) carried into the gap, blended
-// by nearness in time, so that the bridge leaves each end at that end's velocity and agrees with steady motion
-// exactly.
+// A gap between the estimated frames `start` and `end`. The motion over it is taken to change steadily: the
+// twist varies linearly in time, from the velocity of the step into the gap (taken at that step's middle) to the
+// velocity of the step out of it; without a neighbour outside the gap, or over a long gap, an end takes the gap's
+// own mean motion (at the gap's middle). That motion is carried from each end into the gap, and the two are
+// blended by nearness in time: the bridge leaves each end at that end's velocity, is exact for steady motion (a
+// turn included) and for a steadily accelerating drive, and spreads any disagreement of the ends evenly.
 class GapBridge {
  public:
   GapBridge(const IndexedPose& start, const IndexedPose& end, const IndexedPose* before_start,
             const IndexedPose* after_end, bool use_end_velocities, const FrameClock& clock)
-      : start_(start), end_(end), clock_(clock) {
-    const Eigen::Vector6d mean = Velocity(start, end, clock);
-    start_velocity_ =
-        use_end_velocities && before_start != nullptr ? Velocity(*before_start, start, clock) : mean;
-    end_velocity_ = use_end_velocities && after_end != nullptr ? Velocity(end, *after_end, clock) : mean;
+      : start_(start), end_(end), duration_(clock(end.frame_index) - clock(start.frame_index)) {
+    const TimedVelocity mean{0.5 * duration_, Velocity(start, end, clock)};
+    start_velocity_ = end_velocity_ = mean;
+    if (use_end_velocities && before_start != nullptr) {
+      start_velocity_ = {-0.5 * (clock(start.frame_index) - clock(before_start->frame_index)),
+                         Velocity(*before_start, start, clock)};
+    }
+    if (use_end_velocities && after_end != nullptr) {
+      end_velocity_ = {duration_ + 0.5 * (clock(after_end->frame_index) - clock(end.frame_index)),
+                       Velocity(end, *after_end, clock)};
+    }
   }
 
-  Rigid3d WorldFromCamera(size_t frame) const {
-    const double from_start = clock_(frame) - clock_(start_.frame_index);
-    const double to_end = clock_(end_.frame_index) - clock_(frame);
-    const Rigid3d from_start_side = start_.world_from_camera * Rigid3d::Exp(start_velocity_ * from_start);
-    const Rigid3d from_end_side = end_.world_from_camera * Rigid3d::Exp(-end_velocity_ * to_end);
-    return Interpolate(from_start_side, from_end_side, from_start / (from_start + to_end));
+  // `since_start`: the frame's time after the start's.
+  Rigid3d WorldFromCamera(double since_start) const {
+    const Rigid3d from_start_side = start_.world_from_camera * Motion(0.0, since_start);
+    const Rigid3d from_end_side = end_.world_from_camera * Motion(since_start, duration_).Inverse();
+    return Interpolate(from_start_side, from_end_side, since_start / duration_);
   }
 
  private:
+  struct TimedVelocity {
+    double time = 0.0;  // after the start's
+    Eigen::Vector6d twist = Eigen::Vector6d::Zero();
+  };
+
+  Eigen::Vector6d VelocityAt(double time) const {
+    const double span = end_velocity_.time - start_velocity_.time;
+    if (!(span > 0.0)) return start_velocity_.twist;  // both ends take the mean motion
+    return start_velocity_.twist +
+           (end_velocity_.twist - start_velocity_.twist) * ((time - start_velocity_.time) / span);
+  }
+
+  // camera_at_a_from_camera_at_b, integrated in short steps at their middle's velocity: exact while the
+  // twists commute (a steady turn, a straight drive), and close to it over the short gaps bridged this way.
+  Rigid3d Motion(double a, double b) const {
+    constexpr double kStepsPerGap = 64.0;
+    const int steps = std::max(1, static_cast<int>(std::ceil(kStepsPerGap * (b - a) / duration_)));
+    const double step = (b - a) / steps;
+    Rigid3d motion;
+    for (int i = 0; i < steps; ++i) motion = motion * Rigid3d::Exp(VelocityAt(a + (i + 0.5) * step) * step);
+    return motion;
+  }
+
   const IndexedPose& start_;
   const IndexedPose& end_;
-  const FrameClock& clock_;
-  Eigen::Vector6d start_velocity_;
-  Eigen::Vector6d end_velocity_;
+  double duration_;
+  TimedVelocity start_velocity_;
+  TimedVelocity end_velocity_;
 };
 
 }  // namespace
@@ -286,7 +316,7 @@ DenseTrajectory FillFrameGaps(const std::vector<IndexedPose>& estimated, size_t 
         bridge.emplace(*last, gap_end, before_last, after_end,
                        gap <= static_cast<size_t>(options.max_velocity_bridge_frames), clock);
       }
-      dense.world_from_camera[i] = bridge->WorldFromCamera(frame);
+      dense.world_from_camera[i] = bridge->WorldFromCamera(clock(frame) - clock(last->frame_index));
       dense.source[i] = PoseSource::kInterpolated;
       continue;
     }

@@ -48,9 +48,10 @@ struct DenseTrajectoryOptions {
   // Frames after the last estimated one that are predicted by the motion model before the pose is held; the
   // prediction drifts quickly once the vehicle turns or brakes.
   int max_predicted_frames = 10;
-  // A gap between two estimated frames of up to this many frames is bridged by blending the constant-velocity
-  // predictions from its two ends (exact for steady motion, a turn included); a longer one by the geodesic
-  // between the ends, as constant velocity over a longer span goes astray.
+  // A gap between two estimated frames of up to this many frames is bridged by the motion its ends' velocities
+  // give, changing steadily from one to the other, carried from both ends and blended (exact for steady motion,
+  // a turn included, and for steady acceleration); a longer one by the geodesic between the ends, as the ends'
+  // velocities over a longer span go astray.
   int max_velocity_bridge_frames = 50;
   void Check() const;  // throws InvalidArgument
 };
