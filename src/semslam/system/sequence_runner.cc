@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <charconv>
+#include <span>
 #include <nlohmann/json.hpp>
 
 #include "semslam/core/atomic_file.h"
@@ -214,12 +215,13 @@ RunSummary RunSequence(const RunOptions& options) {
   const std::unique_ptr<ImageSequence> sequence = OpenSequence(options.sequence, {options.camera, stereo});
   const size_t first = options.first_frame;
   const size_t end = CheckFrameRange(*sequence, first, options.end_frame, stereo, "run");
+  const std::vector<double> frame_times = FrameTimestamps(*sequence, first, end);
   // Inputs read after SLAM are checked now, so that a malformed file stops the run before its first frame.
   std::optional<GpsLog> gps_log;
   if (!options.gps.empty()) {
     gps_log = ReadGps(options.gps);
     LogSkippedFixes(*gps_log);
-    CheckGpsLog(*gps_log, FrameTimestamps(*sequence, first, end));
+    CheckGpsLog(*gps_log, frame_times);
   }
   std::optional<std::vector<Landmark>> catalogue;
   if (!options.landmarks.empty()) {
@@ -314,7 +316,7 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
   const DenseTrajectory kitti =
       WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(), first, first + stats.frames,
-                                FrameTimestamps(*sequence, first, first + stats.frames));
+                                std::span<const double>(frame_times).first(stats.frames));
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
