@@ -13,6 +13,7 @@
 #include "semslam/core/error.h"
 #include "semslam/geometry/sim3_solver.h"
 #include "semslam/map/keyframe_graph.h"
+#include "semslam/map/keyframe_matches.h"
 #include "semslam/map/map_matcher.h"
 #include "semslam/map/place_candidates.h"
 #include "semslam/mapping/local_mapper.h"
@@ -260,25 +261,19 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     std::vector<MapPoint*> matches;
     if (SearchByBow(*current, *candidate, matches, 0.75f) < options_.min_bow_matches) continue;
 
+    const std::vector<KeyFramePointMatch> usable = MatchesInCameraFrames(*current, *candidate, matches);
     Sim3Correspondences correspondences;
     correspondences.camera1 = current->camera();
     correspondences.camera2 = candidate->camera();
-    std::vector<int> slots;
-    for (size_t i = 0; i < matches.size(); ++i) {
-      MapPoint* p1 = current->map_point(static_cast<int>(i));
-      MapPoint* p2 = matches[i];
-      if (p1 == nullptr || p2 == nullptr || p1->is_bad() || p2->is_bad()) continue;
-      const int i2 = p2->IndexIn(candidate);
-      if (i2 < 0) continue;
-      const Keypoint& kp1 = current->features().keypoints[i];
-      const Keypoint& kp2 = candidate->features().keypoints[static_cast<size_t>(i2)];
-      correspondences.points1.push_back(current->camera_from_world() * p1->position());
-      correspondences.points2.push_back(candidate->camera_from_world() * p2->position());
+    for (const KeyFramePointMatch& m : usable) {
+      const Keypoint& kp1 = current->features().keypoints[m.slot1];
+      const Keypoint& kp2 = candidate->features().keypoints[m.slot2];
+      correspondences.points1.push_back(m.point1);
+      correspondences.points2.push_back(m.point2);
       correspondences.pixels1.push_back(kp1.pixel.cast<double>());
       correspondences.pixels2.push_back(kp2.pixel.cast<double>());
       correspondences.sigma2_1.push_back(current->features().pyramid.sigma2[kp1.level]);
       correspondences.sigma2_2.push_back(candidate->features().pyramid.sigma2[kp2.level]);
-      slots.push_back(static_cast<int>(i));
     }
     Sim3RansacOptions ransac;
     ransac.fix_scale = options_.fix_scale;
@@ -290,9 +285,8 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
 
     // Guided matching with the estimate, then refinement by reprojection in both keyframes.
     std::vector<MapPoint*> guided(current->num_features(), nullptr);
-    for (size_t k = 0; k < slots.size(); ++k) {
-      if (solution->inliers[k])
-        guided[static_cast<size_t>(slots[k])] = matches[static_cast<size_t>(slots[k])];
+    for (size_t k = 0; k < usable.size(); ++k) {
+      if (solution->inliers[k]) guided[usable[k].slot1] = matches[usable[k].slot1];
     }
     SearchBySim3(*current, *candidate, guided, solution->camera1_from_camera2, 7.5f);
     Sim3d current_from_candidate = solution->camera1_from_camera2;
@@ -344,12 +338,9 @@ bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& ca
                                      const std::vector<MapPoint*>& matches,
                                      const Sim3d& current_from_candidate) const {
   Points3d points_current, points_candidate;
-  for (size_t i = 0; i < matches.size(); ++i) {
-    const MapPoint* p1 = current.map_point(static_cast<int>(i));
-    const MapPoint* p2 = matches[i];
-    if (p1 == nullptr || p2 == nullptr || p1->is_bad() || p2->is_bad()) continue;
-    points_current.push_back(current.camera_from_world() * p1->position());
-    points_candidate.push_back(candidate.camera_from_world() * p2->position());
+  for (const KeyFramePointMatch& m : MatchesInCameraFrames(current, candidate, matches)) {
+    points_current.push_back(m.point1);
+    points_candidate.push_back(m.point2);
   }
   if (points_current.empty()) return false;
   const double ratio = MedianDepthRatio(current_from_candidate, points_current, points_candidate);

@@ -11,6 +11,7 @@
 
 #include "semslam/core/error.h"
 #include "semslam/core/timing.h"
+#include "semslam/map/keyframe_matches.h"
 #include "semslam/optim/sim3_optimization.h"
 
 namespace semslam {
@@ -275,33 +276,27 @@ int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>&
   Sim3RefinementProblem problem;
   problem.camera1 = kf1.camera();
   problem.camera2 = kf2.camera();
-  std::vector<size_t> slots;
-  for (size_t i = 0; i < matches12.size(); ++i) {
-    MapPoint* p1 = kf1.map_point(static_cast<int>(i));
-    MapPoint* p2 = matches12[i];
-    if (p1 == nullptr || p2 == nullptr || p1->is_bad() || p2->is_bad()) continue;
-    const int i2 = p2->IndexIn(&kf2);
-    if (i2 < 0) continue;
-    const Keypoint& kp1 = kf1.features().keypoints[i];
-    const Keypoint& kp2 = kf2.features().keypoints[static_cast<size_t>(i2)];
+  const std::vector<KeyFramePointMatch> usable = MatchesInCameraFrames(kf1, kf2, matches12);
+  for (const KeyFramePointMatch& u : usable) {
+    const Keypoint& kp1 = kf1.features().keypoints[u.slot1];
+    const Keypoint& kp2 = kf2.features().keypoints[u.slot2];
     Sim3Match m;
-    m.point1 = kf1.camera_from_world() * p1->position();
-    m.point2 = kf2.camera_from_world() * p2->position();
+    m.point1 = u.point1;
+    m.point2 = u.point2;
     m.pixel1 = kp1.pixel.cast<double>();
     m.pixel2 = kp2.pixel.cast<double>();
     m.inv_sigma2_1 = kf1.features().pyramid.inv_sigma2[kp1.level];
     m.inv_sigma2_2 = kf2.features().pyramid.inv_sigma2[kp2.level];
     problem.matches.push_back(m);
-    slots.push_back(i);
   }
   if (problem.matches.size() < 3) return 0;
   const Sim3RefinementResult result = OptimizeSim3(problem, *kf1_from_kf2, chi2_threshold, fix_scale);
   int inliers = 0;
-  for (size_t k = 0; k < slots.size(); ++k) {
+  for (size_t k = 0; k < usable.size(); ++k) {
     if (result.inliers[k]) {
       ++inliers;
     } else {
-      matches12[slots[k]] = nullptr;
+      matches12[usable[k].slot1] = nullptr;
     }
   }
   *kf1_from_kf2 = result.camera1_from_camera2;
