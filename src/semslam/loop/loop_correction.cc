@@ -289,6 +289,7 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   {
     auto lock = map_.WriteLock();
+    DropObservations(map_, adjusted.outliers);
     // Corrections before -> after per keyframe, propagated down the spanning tree.
     std::unordered_map<KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
     for (const auto& [kf, camera_from_world] : adjusted.camera_from_world) {
@@ -331,8 +332,9 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   ReleaseFreeMemory();  // the solver's working memory is several times the map's
   ++num_global_ba_;
   global_ba_running_ = false;
-  spdlog::info("global bundle adjustment done ({} window{})", adjusted.windows,
-               adjusted.windows == 1 ? "" : "s");
+  spdlog::info("global bundle adjustment done ({} window{}, {} observations failed the chi-square test and were "
+               "dropped)",
+               adjusted.windows, adjusted.windows == 1 ? "" : "s", adjusted.outliers.size());
 }
 
 }  // namespace semslam

@@ -52,21 +52,32 @@ void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
   }
 }
 
+void DropObservations(Map& map, const std::vector<ObservationRef>& observations) {
+  for (const auto& [kf, p] : observations) {
+    if (kf->is_bad() || p->is_bad() || p->IndexIn(kf) < 0) continue;
+    kf->EraseMapPoint(p);
+    p->EraseObservation(kf);
+    if (p->is_bad()) map.EraseMapPoint(p);
+  }
+}
+
+namespace {
+
+std::vector<ObservationRef> Outliers(const BundleAdjustmentResult& result, const std::vector<ObservationRef>& refs) {
+  std::vector<ObservationRef> outliers;
+  for (size_t k = 0; k < refs.size() && k < result.outlier.size(); ++k) {
+    if (result.outlier[k]) outliers.push_back(refs[k]);
+  }
+  return outliers;
+}
+
+}  // namespace
+
 void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
                            const BundleAdjustmentResult& result, const std::vector<KeyFrame*>& keyframes,
                            const std::vector<MapPoint*>& points, const std::vector<ObservationRef>& refs,
                            bool drop_outliers) {
-  if (drop_outliers) {
-    for (size_t k = 0; k < refs.size() && k < result.outlier.size(); ++k) {
-      if (!result.outlier[k]) continue;
-      KeyFrame* kf = refs[k].keyframe;
-      MapPoint* p = refs[k].point;
-      if (kf->is_bad() || p->is_bad()) continue;
-      kf->EraseMapPoint(p);
-      p->EraseObservation(kf);
-      if (p->is_bad()) map.EraseMapPoint(p);
-    }
-  }
+  if (drop_outliers) DropObservations(map, Outliers(result, refs));
   for (size_t i = 0; i < keyframes.size(); ++i) {
     if (!problem.pose_fixed[i] && !keyframes[i]->is_bad())
       keyframes[i]->SetPose(problem.camera_from_world[i]);
@@ -103,6 +114,7 @@ struct WindowProblem {
   std::vector<KeyFrame*> keyframes;  // free, then fixed, as in the problem
   std::vector<MapPoint*> points;
   BundleAdjustmentProblem problem;
+  std::vector<ObservationRef> refs;  // per problem observation
 };
 
 // Gathers the points from the window's keyframes, so that the cost of a window follows its size, not the map's.
@@ -128,7 +140,7 @@ WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
   }
   built.points.assign(points.begin(), points.end());
   const std::vector<KeyFrame*> fixed_keyframes(fixed.begin(), fixed.end());
-  BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, /*refs=*/nullptr);
+  BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, &built.refs);
   built.keyframes.insert(built.keyframes.end(), fixed_keyframes.begin(), fixed_keyframes.end());
   for (size_t i = 0; i < built.keyframes.size(); ++i) {
     const auto it = earlier.camera_from_world.find(built.keyframes[i]);
@@ -144,12 +156,18 @@ WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
 BundleAdjustmentOptions SolverOptions(const GlobalBundleAdjustmentOptions& options) {
   BundleAdjustmentOptions solver;
   solver.iterations = options.iterations;
-  solver.refine_without_outliers = false;
+  solver.refine_without_outliers = options.drop_outliers;
+  solver.refine_iterations = options.iterations;
   solver.abort = options.abort;
   return solver;
 }
 
-void KeepWindow(const WindowProblem& window, GlobalBundleAdjustmentResult* result) {
+void KeepWindow(const WindowProblem& window, const BundleAdjustmentResult& solved, bool drop_outliers,
+                GlobalBundleAdjustmentResult* result) {
+  if (drop_outliers) {
+    const std::vector<ObservationRef> outliers = Outliers(solved, window.refs);
+    result->outliers.insert(result->outliers.end(), outliers.begin(), outliers.end());
+  }
   for (size_t i = 0; i < window.keyframes.size(); ++i) {
     if (!window.problem.pose_fixed[i])
       result->camera_from_world[window.keyframes[i]] = window.problem.camera_from_world[i];
@@ -183,14 +201,15 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
     ++result.windows;
     if (built.problem.observations.empty()) continue;  // its keyframes were culled meanwhile
     const BundleAdjustmentResult solved = BundleAdjust(built.problem, SolverOptions(options));
-    KeepWindow(built, &result);
+    KeepWindow(built, solved, options.drop_outliers, &result);
     if (solved.aborted) break;
   }
   result.aborted = options.abort != nullptr && options.abort->load();
   return result;
 }
 
-void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result) {
+void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result) {
+  DropObservations(map, result.outliers);
   for (const auto& [kf, camera_from_world] : result.camera_from_world) {
     if (!kf->is_bad()) kf->SetPose(camera_from_world);
   }
@@ -202,7 +221,7 @@ void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result) {
 }
 
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options) {
-  WriteGlobalBundleAdjustment(AdjustMapInWindows(map, map_id, options, /*lock_map=*/false));
+  WriteGlobalBundleAdjustment(map, AdjustMapInWindows(map, map_id, options, /*lock_map=*/false));
   ReleaseFreeMemory();
 }
 
@@ -240,7 +259,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
   const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
-  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, {}, false);
+  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs, options.drop_outliers);
   refinement.plain_cost = plain.final_capped_chi2;
   const bool monocular = std::none_of(problem.observations.begin(), problem.observations.end(),
                                       [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });

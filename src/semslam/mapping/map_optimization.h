@@ -27,6 +27,11 @@ void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
                                   const std::vector<MapPoint*>& points, BundleAdjustmentProblem* problem,
                                   std::vector<ObservationRef>* refs);
 
+// Removes each observation from its keyframe and its point, and the points left with too few observations from
+// the map; observations the map no longer holds (a keyframe or point turned bad, a point replaced) are skipped.
+// Write lock.
+void DropObservations(Map& map, const std::vector<ObservationRef>& observations);
+
 // Writes optimized poses and points back (skipping bad ones) and drops outlier observations. Write lock.
 void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
                            const BundleAdjustmentResult& result, const std::vector<KeyFrame*>& keyframes,
@@ -38,19 +43,28 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 // that is along the drive), each with the points its keyframes observe, and the other keyframes observing them
 // held still (at the poses earlier windows gave them). It refines the map locally and keeps the shape the loop
 // correction gave it at large; a map within one window gets the plain global BA.
+//
+// The Huber kernel only bounds each wrong match's pull, and many of them still bend a map: after the first pass,
+// the observations failing the chi-square test are left out of a second pass of as many iterations and dropped
+// from the map (`drop_outliers`). With them kept, a monocular map's final BA left a stretch of the synthetic city
+// 0.6 % off in scale (seed 1 lost for 2 s at frame 700: 0.176 m ATE, against 0.092 m with them dropped, from
+// the same tracking).
 struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
   int window_keyframes = 500;
+  bool drop_outliers = true;
   // Set (from another thread) to stop after the current solver iteration; no later window starts.
   std::atomic<bool>* abort = nullptr;
 
   void Check() const;  // throws InvalidArgument
 };
 
-// What a global BA found, not yet written into the map: the keyframes it moved and the points.
+// What a global BA found, not yet written into the map: the keyframes it moved, the points, and the observations
+// that failed the chi-square test (GlobalBundleAdjustmentOptions::drop_outliers).
 struct GlobalBundleAdjustmentResult {
   std::unordered_map<KeyFrame*, Rigid3d> camera_from_world;
   std::unordered_map<MapPoint*, Eigen::Vector3d> positions;
+  std::vector<ObservationRef> outliers;
   int windows = 0;
   bool aborted = false;
 };
@@ -65,8 +79,9 @@ std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_
 GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
                                                 const GlobalBundleAdjustmentOptions& options, bool lock_map);
 
-// Writes the result into the map (skipping what turned bad) and updates the points' normals. Write lock.
-void WriteGlobalBundleAdjustment(const GlobalBundleAdjustmentResult& result);
+// Writes the result into the map (skipping what turned bad), drops its outlier observations and updates the
+// points' normals. Write lock.
+void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result);
 
 // Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options);

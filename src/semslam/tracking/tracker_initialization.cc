@@ -124,6 +124,9 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   // Full bundle adjustment of the two views, then the scale: median scene depth 1.
   GlobalBundleAdjustmentOptions two_view_ba;
   two_view_ba.iterations = 20;
+  // Every point just passed the two views' inlier test, and dropping either of its two observations would take
+  // the point along: the count of points decides below whether the map starts.
+  two_view_ba.drop_outliers = false;
   GlobalBundleAdjustment(map_, map_id, two_view_ba);
   const double median_depth = kf1->SceneDepthQuantile(2);
   if (median_depth <= 0 || kf2->CountTrackedPoints(1) < options_.init_min_points) {
