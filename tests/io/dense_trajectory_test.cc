@@ -99,7 +99,8 @@ TEST(FillFrameGaps, ABridgeSpreadsTheDisagreementOfItsEnds) {
   for (size_t f = 11; f <= 30; ++f) {
     EXPECT_EQ(dense.source[f - 9], PoseSource::kInterpolated) << f;
     const double s = static_cast<double>(f - 10) / 21.0;
-    const Rigid3d expected(DrivePose(f).rotation, DrivePose(f).translation + shift * (3 * s * s - 2 * s * s * s));
+    const Rigid3d expected(DrivePose(f).rotation,
+                           DrivePose(f).translation + shift * (3 * s * s - 2 * s * s * s));
     ExpectSamePose(dense.world_from_camera[f - 9], expected, 0.03, f);
   }
   // Near its ends the bridge follows the ends' own motion: the first and last bridged frames are a step along it.
@@ -141,13 +142,14 @@ TEST(FillFrameGaps, ASteadilyAcceleratingDriveIsBridgedExactly) {
 TEST(FillFrameGaps, ATurnEasingOutInTheGapIsFollowed) {
   // 1 forward per frame, turning 0.1 rad per frame until frame 8, then the turn eases out (halving every 3
   // frames) while tracking is lost for frames 10..29, as at a corner's end of the synthetic city. The ends'
-  // velocities, taken as changing linearly, turned 1.1 rad over the gap where the ends turn 0.43, and strayed 2.6
-  // in the middle of the gap (1.43 off at worst); the bridge must reach its end along the turn that eased out.
+  // velocities, taken as changing linearly, turned 1.06 rad over the gap where the ends turn 0.38, and the
+  // bridge strayed 1.43 at worst; it must reach its end along the turn that eased out.
   const auto pose = [](size_t frame) {
     Rigid3d p;
     for (size_t i = 0; i < frame; ++i) {
       const double rate = i < 8 ? 0.1 : 0.1 * std::exp2(-static_cast<double>(i - 8) / 3.0);
-      p = p * Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(rate, Eigen::Vector3d::UnitY())), Eigen::Vector3d(0, 0, 1));
+      p = p * Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(rate, Eigen::Vector3d::UnitY())),
+                      Eigen::Vector3d(0, 0, 1));
     }
     return p;
   };
@@ -157,8 +159,9 @@ TEST(FillFrameGaps, ATurnEasingOutInTheGapIsFollowed) {
   double worst_translation = 0.0, worst_rotation = 0.0;
   for (size_t f = 10; f < 30; ++f) {
     EXPECT_EQ(dense.source[f - 8], PoseSource::kInterpolated) << f;
-    worst_translation = std::max(worst_translation, (dense.world_from_camera[f - 8].translation - pose(f).translation).norm());
-    worst_rotation = std::max(worst_rotation, dense.world_from_camera[f - 8].rotation.angularDistance(pose(f).rotation));
+    const Rigid3d& bridged = dense.world_from_camera[f - 8];
+    worst_translation = std::max(worst_translation, (bridged.translation - pose(f).translation).norm());
+    worst_rotation = std::max(worst_rotation, bridged.rotation.angularDistance(pose(f).rotation));
   }
   EXPECT_LT(worst_translation, 0.2);
   EXPECT_LT(worst_rotation, 0.1);  // rad; the easing is steeper than the bump's shape

@@ -211,7 +211,9 @@ TEST_F(DisturbedStreet, SelfCalibrationIsLeftToMapsOfEnoughKeyFrames) {
 // look-alike facade gives.
 class StreetWithWrongMatches : public DisturbedStreet {
  protected:
-  bool IsWrongMatch(int keyframe, size_t point) const override { return keyframe % 4 == 1 && point % 10 == 0; }
+  bool IsWrongMatch(int keyframe, size_t point) const override {
+    return keyframe % 4 == 1 && point % 10 == 0;
+  }
 
   // Which of the wrong observations, and of the right ones, the map still holds.
   std::pair<int, int> WrongAndRightObservationsKept() const {

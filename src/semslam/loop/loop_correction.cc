@@ -332,8 +332,8 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   ReleaseFreeMemory();  // the solver's working memory is several times the map's
   ++num_global_ba_;
   global_ba_running_ = false;
-  spdlog::info("global bundle adjustment done ({} window{}, {} observations failed the chi-square test and were "
-               "dropped)",
+  spdlog::info("global bundle adjustment done ({} window{}, {} observations failed the chi-square test and "
+               "were dropped)",
                adjusted.windows, adjusted.windows == 1 ? "" : "s", adjusted.outliers.size());
 }
 

@@ -63,7 +63,8 @@ void DropObservations(Map& map, const std::vector<ObservationRef>& observations)
 
 namespace {
 
-std::vector<ObservationRef> Outliers(const BundleAdjustmentResult& result, const std::vector<ObservationRef>& refs) {
+std::vector<ObservationRef> Outliers(const BundleAdjustmentResult& result,
+                                     const std::vector<ObservationRef>& refs) {
   std::vector<ObservationRef> outliers;
   for (size_t k = 0; k < refs.size() && k < result.outlier.size(); ++k) {
     if (result.outlier[k]) outliers.push_back(refs[k]);
@@ -259,7 +260,8 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
   const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
-  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs, options.drop_outliers);
+  ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs,
+                        options.drop_outliers);
   refinement.plain_cost = plain.final_capped_chi2;
   const bool monocular = std::none_of(problem.observations.begin(), problem.observations.end(),
                                       [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
