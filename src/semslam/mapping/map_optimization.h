@@ -47,8 +47,8 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 // The Huber kernel only bounds each wrong match's pull, and many of them still bend a map: after the first pass,
 // the observations failing the chi-square test are left out of a second pass of as many iterations and dropped
 // from the map (`drop_outliers`). With them kept, a monocular map's final BA left a stretch of the synthetic city
-// 0.6 % off in scale (seed 1 lost for 2 s at frame 700: 0.176 m ATE, against 0.092 m with them dropped, from
-// the same tracking).
+// 0.6 % off in scale (seed 1 lost for 2 s at frame 700: 0.176 m ATE, against 0.092 m with them left out of the
+// final BA's second pass, from the same tracking).
 struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
   int window_keyframes = 500;
