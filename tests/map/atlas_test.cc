@@ -21,6 +21,15 @@ KeyFrame* AddKeyFrameWithPoints(Map& map, std::uint64_t id, double z, int n_poin
   return kf;
 }
 
+// Makes `kf` observe `n` points of `seen` (its first ones), at keypoints `first_index` on.
+void ObservePointsOf(KeyFrame* kf, const KeyFrame* seen, int n, int first_index) {
+  for (int i = 0; i < n; ++i) {
+    MapPoint* p = seen->map_point(i);
+    p->AddObservation(kf, first_index + i);
+    kf->SetMapPoint(first_index + i, p);
+  }
+}
+
 TEST(Atlas, ANewMapIsSessionZeroAndMapZeroWithItsFirstKeyFrameAsOrigin) {
   Map map;
   auto lock = map.WriteLock();
@@ -188,6 +197,51 @@ TEST(Atlas, TheMapFileKeepsSessionsMapsAndOrigins) {
   }
   // The loaded atlas goes on numbering maps after the stored ones.
   EXPECT_EQ(loaded.StartNewMap(), 2u);
+}
+
+TEST(Atlas, EachMapsFirstKeyFrameIsARootUntilAMergeGivesItAnOlderNeighbour) {
+  testing::TempDir dir;
+  Map map;
+  {
+    auto lock = map.WriteLock();
+    KeyFrame* a = AddKeyFrameWithPoints(map, 0, 0.0, 20);
+    KeyFrame* b = AddKeyFrameWithPoints(map, 1, 1.0, 0);
+    ObservePointsOf(b, a, 20, 0);
+    map.StartNewMap();
+    KeyFrame* c = AddKeyFrameWithPoints(map, 2, 20.0, 20);
+    KeyFrame* d = AddKeyFrameWithPoints(map, 3, 21.0, 0);
+    ObservePointsOf(d, c, 20, 0);
+    for (KeyFrame* kf : map.KeyFrames()) kf->UpdateConnections();
+    EXPECT_EQ(b->parent(), a);
+    EXPECT_EQ(d->parent(), c);
+    // The new map's first keyframe sees only its younger child: taking it as parent closed a cycle.
+    EXPECT_EQ(c->parent(), nullptr);
+    map.MergeMapInto(1, 0);
+    c->UpdateConnections();
+    EXPECT_EQ(c->parent(), nullptr);  // still only its own descendants to choose from
+  }
+  // The map file of two maps loads with the same tree.
+  const auto path = dir / "map.semslam";
+  {
+    auto lock = map.ReadLock();
+    WriteMapFile(path, map);
+  }
+  Map loaded;
+  {
+    auto lock = loaded.WriteLock();
+    ASSERT_NO_THROW(ReadMapFile(path, loaded));
+    const auto kfs = loaded.KeyFrames();
+    ASSERT_EQ(kfs.size(), 4u);
+    EXPECT_EQ(kfs[1]->parent(), kfs[0]);
+    EXPECT_EQ(kfs[2]->parent(), nullptr);
+    EXPECT_EQ(kfs[3]->parent(), kfs[2]);
+  }
+  // Once the merged map's points are fused there, it hangs from the older map's keyframe.
+  auto lock = map.WriteLock();
+  const auto kfs = map.KeyFrames();
+  ObservePointsOf(kfs[2], kfs[0], 20, 20);
+  kfs[2]->UpdateConnections();
+  EXPECT_EQ(kfs[2]->parent(), kfs[0]);
 }
 
 }  // namespace

@@ -88,16 +88,18 @@ TEST(MapValidation, ANanTimestampIsRefused) {
   EXPECT_THAT(error, HasSubstr("timestamp"));
 }
 
-TEST(MapValidation, AParentCycleIsRefused) {
-  testing::TempDir dir;
+TEST(MapValidation, TheTreeCannotBeGivenACycle) {
   ThreeKeyFrames m;
-  {
-    auto lock = m.map.WriteLock();
-    m.kfs[0]->ChangeParent(m.kfs[2]);  // 0 -> 2 -> 1 -> 0
-    m.kfs[2]->ChangeParent(m.kfs[1]);
-    m.kfs[1]->ChangeParent(m.kfs[0]);
-  }
-  EXPECT_THAT(LoadError(m.map, dir / "map.semslam"), HasSubstr("cycle"));
+  auto lock = m.map.WriteLock();
+  m.kfs[1]->ChangeParent(m.kfs[0]);
+  m.kfs[2]->ChangeParent(m.kfs[1]);
+  m.kfs[0]->ChangeParent(m.kfs[2]);  // would close 0 -> 2 -> 1 -> 0
+  m.kfs[1]->ChangeParent(m.kfs[1]);
+  EXPECT_EQ(m.kfs[0]->parent(), nullptr);
+  EXPECT_EQ(m.kfs[1]->parent(), m.kfs[0]);
+  EXPECT_EQ(m.kfs[2]->parent(), m.kfs[1]);
+  EXPECT_TRUE(m.kfs[2]->HasAncestor(m.kfs[0]));
+  EXPECT_FALSE(m.kfs[0]->HasAncestor(m.kfs[2]));
 }
 
 TEST(MapValidation, ARecordCheckFindsEachContradiction) {
@@ -138,10 +140,21 @@ TEST(MapValidation, ARecordCheckFindsEachContradiction) {
   EXPECT_NO_THROW(CheckPointRecord(3, Eigen::Vector3d(0, 0, 10), 3, 2, "map.semslam"));
 }
 
-TEST(MapValidation, MissingParentsAndSelfParentsAreRefused) {
-  EXPECT_NO_THROW(CheckSpanningTree({{0, kNoParent}, {1, 0}, {2, 1}}, "m"));
-  EXPECT_THROW(CheckSpanningTree({{0, kNoParent}, {1, 5}}, "m"), InputError);
-  EXPECT_THROW(CheckSpanningTree({{0, 0}}, "m"), InputError);
+TEST(MapValidation, AMissingParentIsRefusedAndACycleIsCutAboveItsOldestKeyFrame) {
+  std::unordered_map<std::uint64_t, std::uint64_t> tree = {{0, kNoParent}, {1, 0}, {2, 1}};
+  EXPECT_TRUE(RepairSpanningTree(tree, "m").empty());
+  EXPECT_EQ(tree.at(2), 1u);
+  std::unordered_map<std::uint64_t, std::uint64_t> missing = {{0, kNoParent}, {1, 5}};
+  EXPECT_THROW(RepairSpanningTree(missing, "m"), InputError);
+  // What semslam wrote before 2026-11-28 after a loss: map 1's first keyframe (4) under its child (5).
+  std::unordered_map<std::uint64_t, std::uint64_t> atlas = {{0, kNoParent}, {1, 0}, {4, 5}, {5, 4}, {6, 5}};
+  EXPECT_EQ(RepairSpanningTree(atlas, "m"), std::vector<std::uint64_t>{4});
+  EXPECT_EQ(atlas.at(4), kNoParent);
+  EXPECT_EQ(atlas.at(5), 4u);
+  EXPECT_EQ(atlas.at(6), 5u);
+  std::unordered_map<std::uint64_t, std::uint64_t> self = {{0, 0}, {1, 0}};
+  EXPECT_EQ(RepairSpanningTree(self, "m"), std::vector<std::uint64_t>{0});
+  EXPECT_EQ(self.at(0), kNoParent);
 }
 
 }  // namespace

@@ -47,6 +47,15 @@ TEST(MapMerge, ARealDriveCutBeforeItsRevisitStartsAMapAndMergesItThere) {
   // 0.39-0.45 m.
   ASSERT_TRUE(j.contains("ate_rmse")) << j.dump(2);
   EXPECT_LE(j["ate_rmse"].get<double>(), 0.35);
+
+  // A next run starts from the map it wrote. The new map's first keyframe once took its own child as parent in
+  // the spanning tree, and no run could load a map with a merge in it.
+  const fs::path reuse = dir / "reuse";
+  const CommandResult u = RunSemslam({"run", "--sequence", cut.string(), "--out", reuse.string(), "--mode", "mono",
+                                      "--map-in", (out / "map.semslam").string(), "--localization-only",
+                                      "--frames", "0:10", "--pacing", "synchronous", "-q"});
+  ASSERT_TRUE(u.Succeeded()) << u.Describe();
+  EXPECT_GE(ReadJson(reuse / "run.json").value("with_pose", 0), 9);
 }
 
 }  // namespace

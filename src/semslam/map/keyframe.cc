@@ -112,18 +112,25 @@ void KeyFrame::UpdateConnections() {
     ordered_connections_.push_back(other);
     ordered_weights_.push_back(weight);
   }
-  if (first_connection_ && id_ != 0) {
+  if (first_connection_ && !map_origin_) {
     // The spanning-tree parent: the best covisible keyframe, preferring older ones so the tree stays causal.
+    // Never one of its own descendants: a merged map's first keyframe sees only its own map's younger keyframes
+    // until the maps' points are fused there, and taking one of them made a cycle (a map file that could not
+    // be loaded). It stays a root until then.
     KeyFrame* parent = nullptr;
-    for (KeyFrame* candidate : ordered_connections_) {
-      if (candidate->id() < id_) {
-        parent = candidate;
-        break;
+    for (const bool older_only : {true, false}) {
+      for (KeyFrame* candidate : ordered_connections_) {
+        if ((!older_only || candidate->id() < id_) && !candidate->HasAncestor(this)) {
+          parent = candidate;
+          break;
+        }
       }
+      if (parent != nullptr) break;
     }
-    if (parent == nullptr) parent = ordered_connections_.front();
-    ChangeParent(parent);
-    first_connection_ = false;
+    if (parent != nullptr) {
+      ChangeParent(parent);
+      first_connection_ = false;
+    }
   }
 }
 
@@ -171,8 +178,15 @@ int KeyFrame::ConnectionWeight(KeyFrame* other) const {
   return it == connection_weights_.end() ? 0 : it->second;
 }
 
+bool KeyFrame::HasAncestor(const KeyFrame* keyframe) const {
+  for (const KeyFrame* k = this; k != nullptr; k = k->parent_) {
+    if (k == keyframe) return true;
+  }
+  return false;
+}
+
 void KeyFrame::ChangeParent(KeyFrame* parent) {
-  if (parent == this) return;
+  if (parent != nullptr && parent->HasAncestor(this)) return;  // the tree stays a tree
   if (parent_ != nullptr) parent_->children_.erase(this);
   parent_ = parent;
   if (parent_ != nullptr) parent_->children_.insert(this);

@@ -72,9 +72,13 @@ class KeyFrame {
   const std::vector<KeyFrame*>& Covisibles() const { return ordered_connections_; }
   int ConnectionWeight(KeyFrame* other) const;
 
-  // Spanning tree (the strongest covisibility link to an older keyframe) and loop edges.
+  // Spanning tree (the strongest covisibility link to an older keyframe; a map's first keyframe is a root) and
+  // loop edges.
   KeyFrame* parent() const { return parent_; }
   const std::set<KeyFrame*, ById>& children() const { return children_; }
+  // Whether `keyframe` is this one or lies on its path to the root.
+  bool HasAncestor(const KeyFrame* keyframe) const;
+  // Refused (the parent stays) when `parent` descends from this keyframe: that would close a cycle.
   void ChangeParent(KeyFrame* parent);
   void AddLoopEdge(KeyFrame* other);
   const std::set<KeyFrame*, ById>& loop_edges() const { return loop_edges_; }

@@ -1,6 +1,7 @@
 #include "semslam/map/map_file.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <unordered_map>
 
@@ -355,17 +356,20 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
       if (loop == keyframes[i]->id()) throw InputError(path, fmt::format("keyframe {}: loop edge to itself", loop));
     }
   }
-  CheckSpanningTree(parent_of, path);
+  for (const std::uint64_t id : RepairSpanningTree(parent_of, path)) {
+    spdlog::warn("{}: keyframe {} was its own ancestor in the spanning tree (a map file of a semslam before "
+                 "2026-11-28); it is made a root",
+                 path.string(), id);
+  }
+  // The stored tree first: UpdateConnections would otherwise choose parents of its own.
+  for (KeyFrame* kf : keyframes) {
+    const std::uint64_t parent = parent_of.at(kf->id());
+    MapSerializer::SetParent(kf, parent == kNoParent ? nullptr : by_id.at(parent));
+  }
   for (size_t i = 0; i < keyframes.size(); ++i) {
     KeyFrame* kf = keyframes[i];
     kf->UpdateConnections();
-    const auto& [parent, loops] = links[i];
-    if (parent != kNone) {
-      const auto it = by_id.find(parent);
-      if (it == by_id.end())
-        throw InputError(path, fmt::format("keyframe {}: parent {} missing", kf->id(), parent));
-      MapSerializer::SetParent(kf, it->second);
-    }
+    const auto& loops = links[i].second;
     for (const auto loop : loops) {
       const auto it = by_id.find(loop);
       if (it == by_id.end())

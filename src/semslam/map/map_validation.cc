@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_set>
 
@@ -76,27 +77,38 @@ void CheckPointRecord(std::uint64_t id, const Eigen::Vector3d& position, int vis
   }
 }
 
-void CheckSpanningTree(const std::unordered_map<std::uint64_t, std::uint64_t>& parent_of,
-                       const std::filesystem::path& file) {
+std::vector<std::uint64_t> RepairSpanningTree(std::unordered_map<std::uint64_t, std::uint64_t>& parent_of,
+                                              const std::filesystem::path& file) {
+  std::vector<std::uint64_t> ids;
+  ids.reserve(parent_of.size());
+  for (const auto& [id, parent] : parent_of) {
+    if (parent != kNoParent && !parent_of.count(parent)) {
+      Fail(file, fmt::format("keyframe {}", id), fmt::format("parent {} does not exist", parent));
+    }
+    ids.push_back(id);
+  }
+  std::sort(ids.begin(), ids.end());
+  std::vector<std::uint64_t> made_roots;
   // Keyframes whose path to a root is known to be sound.
   std::unordered_set<std::uint64_t> rooted;
-  for (const auto& [start, start_parent] : parent_of) {
-    std::unordered_set<std::uint64_t> path;
-    std::uint64_t id = start;
-    while (!rooted.count(id)) {
-      if (!path.insert(id).second) {
-        Fail(file, fmt::format("keyframe {}", start), fmt::format("the spanning tree has a cycle through keyframe {}", id));
+  for (const std::uint64_t start : ids) {
+    std::vector<std::uint64_t> path;
+    std::unordered_set<std::uint64_t> on_path;
+    for (std::uint64_t id = start; id != kNoParent && !rooted.count(id); id = parent_of.at(id)) {
+      if (!on_path.insert(id).second) {
+        // A tree grows from older keyframes to younger ones: the link from the cycle's oldest keyframe to a
+        // younger one is the one that went wrong. Without it, every keyframe on the path leads to that one.
+        const auto cycle = std::find(path.begin(), path.end(), id);
+        const std::uint64_t oldest = *std::min_element(cycle, path.end());
+        parent_of[oldest] = kNoParent;
+        made_roots.push_back(oldest);
+        break;
       }
-      const auto it = parent_of.find(id);
-      const std::uint64_t parent = it->second;
-      if (parent == kNoParent) break;
-      if (!parent_of.count(parent)) {
-        Fail(file, fmt::format("keyframe {}", id), fmt::format("parent {} does not exist", parent));
-      }
-      id = parent;
+      path.push_back(id);
     }
     rooted.insert(path.begin(), path.end());
   }
+  return made_roots;
 }
 
 }  // namespace semslam

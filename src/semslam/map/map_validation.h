@@ -36,11 +36,14 @@ void CheckKeyFrameRecord(const KeyFrameRecordCheck& record, const std::filesyste
 void CheckPointRecord(std::uint64_t id, const Eigen::Vector3d& position, int visible, int found,
                       const std::filesystem::path& file);
 
-// The spanning tree: parent ids by keyframe id (kNoParent for a root). Every parent must exist and no keyframe
-// may be its own ancestor.
+// The spanning tree: parent ids by keyframe id (kNoParent for a root). Every parent must exist (InputError
+// otherwise). A keyframe that is its own ancestor is repaired, not refused: the tree is derived from
+// covisibility, any forest serves, and before 2026-11-28 semslam wrote a cycle through the first keyframe of
+// every map started after a loss. Each cycle is cut above its oldest keyframe, which becomes a root; returns
+// those keyframes' ids.
 inline constexpr std::uint64_t kNoParent = UINT64_MAX;
-void CheckSpanningTree(const std::unordered_map<std::uint64_t, std::uint64_t>& parent_of,
-                       const std::filesystem::path& file);
+std::vector<std::uint64_t> RepairSpanningTree(std::unordered_map<std::uint64_t, std::uint64_t>& parent_of,
+                                              const std::filesystem::path& file);
 
 // Largest coordinate (metres) a map may hold: far beyond any drive, far below where float and Ceres break down.
 inline constexpr double kMaxMapCoordinateM = 1e7;
