@@ -117,16 +117,14 @@ void KeyFrame::UpdateConnections() {
     // Never one of its own descendants: a merged map's first keyframe sees only its own map's younger keyframes
     // until the maps' points are fused there, and taking one of them made a cycle (a map file that could not
     // be loaded). It stays a root until then.
-    KeyFrame* parent = nullptr;
-    for (const bool older_only : {true, false}) {
+    const auto best_covisible = [this](bool older_only) -> KeyFrame* {
       for (KeyFrame* candidate : ordered_connections_) {
-        if ((!older_only || candidate->id() < id_) && !candidate->HasAncestor(this)) {
-          parent = candidate;
-          break;
-        }
+        if ((!older_only || candidate->id() < id_) && !IsAncestorOf(candidate)) return candidate;
       }
-      if (parent != nullptr) break;
-    }
+      return nullptr;
+    };
+    KeyFrame* parent = best_covisible(/*older_only=*/true);
+    if (parent == nullptr) parent = best_covisible(/*older_only=*/false);
     if (parent != nullptr) {
       ChangeParent(parent);
       first_connection_ = false;
@@ -185,8 +183,13 @@ bool KeyFrame::HasAncestor(const KeyFrame* keyframe) const {
   return false;
 }
 
+bool KeyFrame::IsAncestorOf(const KeyFrame* keyframe) const {
+  // A keyframe without children (a new one, the usual case) is no one's ancestor but its own: no walk.
+  return keyframe == this || (!children_.empty() && keyframe->HasAncestor(this));
+}
+
 void KeyFrame::ChangeParent(KeyFrame* parent) {
-  if (parent != nullptr && parent->HasAncestor(this)) return;  // the tree stays a tree
+  if (parent != nullptr && IsAncestorOf(parent)) return;  // the tree stays a tree
   if (parent_ != nullptr) parent_->children_.erase(this);
   parent_ = parent;
   if (parent_ != nullptr) parent_->children_.insert(this);

@@ -78,6 +78,8 @@ class KeyFrame {
   const std::set<KeyFrame*, ById>& children() const { return children_; }
   // Whether `keyframe` is this one or lies on its path to the root.
   bool HasAncestor(const KeyFrame* keyframe) const;
+  // Whether this keyframe is `keyframe` or lies on its path to the root (keyframe->HasAncestor(this)).
+  bool IsAncestorOf(const KeyFrame* keyframe) const;
   // Refused (the parent stays) when `parent` descends from this keyframe: that would close a cycle.
   void ChangeParent(KeyFrame* parent);
   void AddLoopEdge(KeyFrame* other);
