@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -101,6 +103,77 @@ TEST_P(BlackOut, TheMapIsFoundAgainAndTheDriveGoesOnInIt) {
 std::string ModeName(const ::testing::TestParamInfo<std::string>& mode) { return mode.param; }
 
 INSTANTIATE_TEST_SUITE_P(Modes, BlackOut, ::testing::Values("mono", "stereo"), ModeName);
+
+// Seed 2027's town, black frames 750-769 on a street of repeating fronts. The car drives 19 m in the black-out,
+// and the street a block back looks like the one ahead: found by bag of words in the lost map, the first frame
+// after the black-out was put where the camera had been before it, 13-24 m off, and the drive went on from
+// there (ATE 4.0 m over the whole 1500-frame drive, in 2 of 4 runs at default pacing; every run over frames
+// 640-799 at synchronous pacing). Lost for more than a second, the camera is now searched for in the lost map
+// only around the prediction; here a new map starts at frame 770.
+constexpr int kLookAlikeTownFrames = 800, kLookAlikeFirstFrame = 640;
+
+Artifact LookAlikeRun() {
+  const Artifact town = SyntheticTown("town2027_800", kLookAlikeTownFrames, 2027);
+  if (!town.ok()) return town;
+  const std::vector<std::string> compose = {
+      "compose", "--sequence", SequenceDir(town.dir).string(), "--frames",
+      "0-" + std::to_string(kLookAlikeTownFrames - 1), "--black", "750:770", "-q"};
+  const std::vector<std::string> run = {"run",      "--mode",    "mono",
+                                        "--frames", std::to_string(kLookAlikeFirstFrame) + ":",
+                                        "--pacing", "synchronous", "--segmenter", "none", "-q"};
+  std::vector<std::string> recipe = compose;
+  recipe.insert(recipe.end(), run.begin(), run.end());
+  return SharedArtifact("town2027_800_black750", recipe, [&](const fs::path& dir) -> std::string {
+    std::vector<std::string> c = compose;
+    c.insert(c.end(), {"--out", (dir / "sequence").string()});
+    CommandResult r = RunSemslam(c);
+    if (!r.Succeeded()) return r.Describe();
+    std::vector<std::string> full = run;
+    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
+    r = RunSemslam(full);
+    return r.Succeeded() ? "" : r.Describe();
+  });
+}
+
+// frames.csv's tracked poses, by map.
+std::map<int, Trajectory> TrackedPosesByMap(const fs::path& frames_csv) {
+  std::map<int, Trajectory> maps;
+  const std::vector<std::string> rows = Lines(ReadText(frames_csv));
+  for (size_t i = 1; i < rows.size(); ++i) {
+    std::vector<std::string> cells;
+    std::stringstream row(rows[i]);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    if (cells.size() < 12 || cells[3] != "tracked") continue;
+    StampedPose pose;
+    pose.timestamp = std::stod(cells[1]);
+    pose.world_from_camera.translation = {std::stod(cells[5]), std::stod(cells[6]), std::stod(cells[7])};
+    pose.world_from_camera.rotation =
+        Eigen::Quaterniond(std::stod(cells[11]), std::stod(cells[8]), std::stod(cells[9]), std::stod(cells[10]));
+    maps[std::stoi(cells[2])].push_back(pose);
+  }
+  return maps;
+}
+
+TEST(BlackOutOnALookAlikeStreet, NoFrameIsPutABlockBackInTheLostMap) {
+  SEMSLAM_REQUIRE_BINARY();
+  SEMSLAM_ASSERT_ARTIFACT(dir, LookAlikeRun());
+  const std::vector<Rigid3d> truth_poses = ReadKittiPoses(dir / "sequence" / "gt.txt");
+  const std::vector<double> times = ReadTimes(dir / "sequence" / "times.txt");
+  ASSERT_EQ(truth_poses.size(), times.size());
+  Trajectory truth;
+  for (size_t i = 0; i < times.size(); ++i) truth.push_back({times[i], truth_poses[i]});
+  const std::map<int, Trajectory> maps = TrackedPosesByMap(dir / "out" / "frames.csv");
+  ASSERT_FALSE(maps.empty());
+  ASSERT_TRUE(maps.count(0));
+  EXPECT_GE(maps.at(0).size(), 100u);  // frames 640-749
+  // Each map's tracked poses, Sim(3)-aligned to the truth on their own: none more than 2 m off (issue 9's bar
+  // for relocalizations). Measured: 0.15 m in map 0, 0.05 m in map 1; 13.3 m at frame 770 before the fix.
+  for (const auto& [map, poses] : maps) {
+    const AteResult ate = ComputeAte(poses, truth, Alignment::kSim3);
+    EXPECT_LE(ate.max, 2.0) << "map " << map << ": " << poses.size() << " tracked frames, ATE " << ate.rmse
+                            << " m, worst " << ate.max << " m (frames.csv of " << (dir / "out").string() << ")";
+  }
+}
 
 }  // namespace
 }  // namespace semslam::system_test

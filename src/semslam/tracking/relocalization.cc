@@ -4,6 +4,8 @@
 #include <cmath>
 #include <set>
 
+#include <fmt/format.h>
+
 #include "semslam/geometry/pnp.h"
 #include "semslam/map/map_matcher.h"
 #include "semslam/map/place_candidates.h"
@@ -127,6 +129,20 @@ bool RelocalizeFromPrediction(Frame& frame, const std::vector<KeyFrame*>& nearby
 
 }  // namespace
 
+std::optional<std::string> MotionSinceLoss::Refuses(const Eigen::Vector3d& center) const {
+  const double off = (center - predicted_center).norm();
+  if (off > radius) return fmt::format("{:.2f} from where the camera can be (limit {:.2f})", off, radius);
+  const Eigen::Vector3d ahead = predicted_center - last_center;
+  if (ahead.norm() <= backward_tolerance) return std::nullopt;
+  const double along = (center - last_center).dot(ahead.normalized());
+  if (along < -backward_tolerance) {
+    return fmt::format("{:.2f} behind where the camera was last tracked (limit {:.2f}), against {:.2f} ahead "
+                       "by the motion model",
+                       -along, backward_tolerance, ahead.norm());
+  }
+  return std::nullopt;
+}
+
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
                      const std::function<int(Frame&)>& optimize_pose, const RelocalizationOptions& options) {
   std::vector<KeyFrame*> nearby;
@@ -141,6 +157,7 @@ bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& 
       RelocalizeFromPrediction(frame, nearby, *options.predicted, optimize_pose, options)) {
     return true;
   }
+  if (!options.by_appearance) return false;
   PlaceCandidateOptions candidate_options;
   candidate_options.map_id = options.map_id;
   std::vector<KeyFrame*> candidates = nearby;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "semslam/geometry/rigid3.h"
@@ -15,6 +16,21 @@
 namespace semslam {
 
 class KeyFrameDatabase;
+
+// Where a camera lost a moment ago can be: within `radius` of where the motion before the loss puts it, and
+// not behind where it was last tracked. A car does not reverse in the seconds of a loss, while a street of
+// repeating fronts offers a look-alike place a block back (seed 2027: 19 m back, an ATE of 4 m).
+struct MotionSinceLoss {
+  Eigen::Vector3d last_center = Eigen::Vector3d::Zero();       // at the last tracked frame
+  Eigen::Vector3d predicted_center = Eigen::Vector3d::Zero();  // the motion model's prediction for now
+  double radius = 0.0;
+  // How far behind last_center, along the predicted motion, a pose may be: its noise. Going back is not
+  // checked when the predicted motion is shorter than this (a car standing still).
+  double backward_tolerance = 0.0;
+
+  // Empty when a camera at `center` fits the motion; else the reason it does not.
+  std::optional<std::string> Refuses(const Eigen::Vector3d& center) const;
+};
 
 struct RelocalizationOptions {
   bool exclude_dynamic = false;         // points labeled as moving classes are not used
@@ -29,10 +45,15 @@ struct RelocalizationOptions {
   // projects them, which matches what bag-of-words matching misses when the scale has changed (a black-out
   // while driving: the same street, seen 20 m further on).
   std::optional<Rigid3d> predicted;
+  // False: only the search around `predicted`. Lost for long, the camera may be far from the prediction,
+  // where a look-alike place (a street of repeating fronts, a block back) matches as well as the true one:
+  // a place recognized by appearance alone is then left to the map merge, which checks it against several
+  // keyframes of both maps.
+  bool by_appearance = true;
 };
 
-// Tries the nearby keyframes' points where the prediction projects them, then the nearby keyframes and the
-// place candidates (map/place_candidates.h) of `frame` (whose bag of words is computed) by bag of words,
+// Tries the nearby keyframes' points where the prediction projects them, then (options.by_appearance) the
+// nearby keyframes and the place candidates (map/place_candidates.h) of `frame` (whose bag of words is computed) by bag of words,
 // until one gives a pose that `options.plausible` accepts with at least 50 inliers (30 when found where the
 // prediction put it). `optimize_pose` refines the frame pose from frame.map_points and sets frame.outliers,
 // returning the inlier count. On success the frame has its pose and matches. Read lock.

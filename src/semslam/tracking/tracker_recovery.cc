@@ -119,20 +119,25 @@ bool Tracker::Relocalize(Frame& frame) {
     PredictPose(predicted, frames_since_tracked);
     const std::optional<Rigid3d> camera_from_world = CurrentCameraFromWorld(predicted);
     relocalization.predicted = camera_from_world;
-    if (camera_from_world) {
-      const Eigen::Vector3d center = camera_from_world->Inverse().translation;
+    // Once a new map has started, the lost map is searched only around the prediction.
+    relocalization.by_appearance = !lost_map_.has_value();
+    const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
+    if (camera_from_world && last_camera_from_world) {
       const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
+      const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
+      const double depth = last_reference->SceneDepthQuantile(2);
+      MotionSinceLoss motion;
+      motion.last_center = last_camera_from_world->Inverse().translation;
+      motion.predicted_center = camera_from_world->Inverse().translation;
       // Three times the distance the last motion would cover in the time since the last tracked frame, and
       // never less than half the scene depth.
-      const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
-      const double radius =
-          std::max(3.0 * step * std::max(1.0, steps), 0.5 * last_reference->SceneDepthQuantile(2));
-      relocalization.plausible = [center, radius, id = frame.id()](const Frame& f) {
-        const double distance = (f.center() - center).norm();
-        if (distance <= radius) return true;
-        spdlog::info("frame {}: relocalization {:.1f} from where the camera can be (limit {:.1f}) refused",
-                     id, distance, radius);
-        return false;
+      motion.radius = std::max(3.0 * step * std::max(1.0, steps), 0.5 * depth);
+      // Two steps of the last motion, or a twentieth of the scene depth for a slow camera.
+      motion.backward_tolerance = std::max(2.0 * step, 0.05 * depth);
+      relocalization.plausible = [motion, id = frame.id()](const Frame& f) {
+        const std::optional<std::string> refused = motion.Refuses(f.center());
+        if (refused) spdlog::info("frame {}: a relocalization {} is refused", id, *refused);
+        return !refused;
       };
     }
   }
