@@ -1,8 +1,8 @@
 // Where a camera lost a moment ago may be relocalized (MotionSinceLoss).
 
-#include <gtest/gtest.h>
-
 #include "semslam/tracking/relocalization.h"
+
+#include <gtest/gtest.h>
 
 namespace semslam {
 namespace {

@@ -1,10 +1,10 @@
 #include "semslam/tracking/relocalization.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <set>
-
-#include <fmt/format.h>
 
 #include "semslam/geometry/pnp.h"
 #include "semslam/map/map_matcher.h"
@@ -136,9 +136,10 @@ std::optional<std::string> MotionSinceLoss::Refuses(const Eigen::Vector3d& cente
   if (ahead.norm() <= backward_tolerance) return std::nullopt;
   const double along = (center - last_center).dot(ahead.normalized());
   if (along < -backward_tolerance) {
-    return fmt::format("{:.2f} behind where the camera was last tracked (limit {:.2f}), against {:.2f} ahead "
-                       "by the motion model",
-                       -along, backward_tolerance, ahead.norm());
+    return fmt::format(
+        "{:.2f} behind where the camera was last tracked (limit {:.2f}), against {:.2f} ahead "
+        "by the motion model",
+        -along, backward_tolerance, ahead.norm());
   }
   return std::nullopt;
 }

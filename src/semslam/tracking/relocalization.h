@@ -53,10 +53,11 @@ struct RelocalizationOptions {
 };
 
 // Tries the nearby keyframes' points where the prediction projects them, then (options.by_appearance) the
-// nearby keyframes and the place candidates (map/place_candidates.h) of `frame` (whose bag of words is computed) by bag of words,
-// until one gives a pose that `options.plausible` accepts with at least 50 inliers (30 when found where the
-// prediction put it). `optimize_pose` refines the frame pose from frame.map_points and sets frame.outliers,
-// returning the inlier count. On success the frame has its pose and matches. Read lock.
+// nearby keyframes and the place candidates (map/place_candidates.h) of `frame` (whose bag of words is
+// computed) by bag of words, until one gives a pose that `options.plausible` accepts with at least 50
+// inliers (30 when found where the prediction put it). `optimize_pose` refines the frame pose from
+// frame.map_points and sets frame.outliers, returning the inlier count. On success the frame has its pose and
+// matches. Read lock.
 bool RelocalizeFrame(Frame& frame, const KeyFrameDatabase& database, const Map& map,
                      const std::function<int(Frame&)>& optimize_pose,
                      const RelocalizationOptions& options = {});
