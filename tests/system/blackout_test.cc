@@ -163,11 +163,7 @@ std::map<int, Trajectory> TrackedPosesByMap(const fs::path& frames_csv) {
 TEST(BlackOutOnALookAlikeStreet, NoFrameIsPutABlockBackInTheLostMap) {
   SEMSLAM_REQUIRE_BINARY();
   SEMSLAM_ASSERT_ARTIFACT(dir, LookAlikeRun());
-  const std::vector<Rigid3d> truth_poses = ReadKittiPoses(dir / "sequence" / "gt.txt");
-  const std::vector<double> times = ReadTimes(dir / "sequence" / "times.txt");
-  ASSERT_EQ(truth_poses.size(), times.size());
-  Trajectory truth;
-  for (size_t i = 0; i < times.size(); ++i) truth.push_back({times[i], truth_poses[i]});
+  const Trajectory truth = ReadSequenceGroundTruth(dir / "sequence");
   const std::map<int, Trajectory> maps = TrackedPosesByMap(dir / "out" / "frames.csv");
   ASSERT_FALSE(maps.empty());
   ASSERT_TRUE(maps.count(0));

@@ -110,6 +110,8 @@ bool Tracker::Relocalize(Frame& frame) {
   const int frames_since_tracked = frames_since_tracked_ + 1;
   const FrameRecord last = last_tracked_;
   const KeyFrame* last_reference = CurrentReference(last);
+  const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
+  const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
   if (last_reference != nullptr) {
     relocalization.map_id = last_reference->map_id();
     relocalization.nearby = last_reference->BestCovisibles(kNearbyKeyFrames);
@@ -121,10 +123,8 @@ bool Tracker::Relocalize(Frame& frame) {
     relocalization.predicted = camera_from_world;
     // Once a new map has started, the lost map is searched only around the prediction.
     relocalization.by_appearance = !lost_map_.has_value();
-    const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
     if (camera_from_world && last_camera_from_world) {
       const double step = last_velocity_ ? last_velocity_->translation.norm() : 0.0;
-      const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
       const double depth = last_reference->SceneDepthQuantile(2);
       MotionSinceLoss motion;
       motion.last_center = last_camera_from_world->Inverse().translation;
@@ -151,8 +151,6 @@ bool Tracker::Relocalize(Frame& frame) {
     // The mean motion over the gap, per step: the car may have sped up or turned while the camera was lost,
     // and the motion from before the loss, carried on, put the next stereo frame a quarter metre short of
     // where it was (a frame tracked on 37 points, made a keyframe, and the map bent by 4 degrees after it).
-    const std::optional<Rigid3d> last_camera_from_world = CurrentCameraFromWorld(last);
-    const double steps = StepsSinceTracked(frame.timestamp(), frames_since_tracked);
     velocity_ = last_camera_from_world && steps >= 1.0
                     ? Interpolate(Rigid3d(), frame.camera_from_world() * last_camera_from_world->Inverse(),
                                   1.0 / steps)
