@@ -39,7 +39,10 @@ void AddComposeCommand(CLI::App& app) {
       "compose",
       "Make a sequence of another one's frames (back and forth, cut, blacked out) as an image folder");
   cmd->add_option("--sequence", args->sequence, "Source sequence (any that `run` reads)")->required();
-  cmd->add_option("--out", args->out, "Output folder (new or empty): images, times.txt, gt.txt, camera.yaml")
+  cmd->add_option(
+         "--out", args->out,
+         "Output folder (new or empty): images, times.txt, gt.txt, labels and depth (when the source "
+         "has them), camera.yaml")
       ->required();
   cmd->add_option("--frames", args->frames,
                   "Source frames in order: ranges A-B (A > B runs backwards) and frames, comma-separated, "

@@ -1,11 +1,14 @@
 #include "semslam/io/sequence_composer.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "semslam/core/error.h"
+#include "semslam/io/image_folder.h"
 #include "semslam/io/sequence.h"
 #include "support/test_support.h"
 
@@ -73,6 +76,65 @@ TEST(WriteComposedSequence, KittiForthAndBackWithTruthAndABlackFrame) {
     EXPECT_NE(std::string(e.what()).find("no frame 1000 (its frames are 0 to 159)"), std::string::npos) << e.what();
   }
   EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({1}), dir / "composed", false), InputError);
+}
+
+// A three-frame image folder with per-frame labels (8 bit) and depth (16 bit), as the synthetic city has.
+std::filesystem::path WriteLabelledSource(const std::filesystem::path& dir) {
+  for (const char* sub : {"images", "labels", "depth"}) std::filesystem::create_directories(dir / sub);
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = fmt::format("{:06d}.png", i);
+    WritePng(dir / "images" / name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(50 + i)));
+    WritePng(dir / "labels" / name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(i)));  // road, sidewalk, building
+    WritePng(dir / "depth" / name, cv::Mat(48, 64, CV_16UC1, cv::Scalar(1000 + 300 * i)));
+  }
+  CameraYaml yaml;
+  yaml.camera.width = 64;
+  yaml.camera.height = 48;
+  yaml.camera.fx = yaml.camera.fy = 50;
+  yaml.camera.cx = 32;
+  yaml.camera.cy = 24;
+  yaml.images = dir / "images";
+  yaml.labels = dir / "labels";
+  yaml.depth = dir / "depth";
+  WriteCameraYaml(dir / "camera.yaml", yaml);
+  return dir;
+}
+
+cv::Mat ReadUnchanged(const std::filesystem::path& path) {
+  return cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+}
+
+TEST(WriteComposedSequence, LabelsAndDepthGoAlongAndABlackFrameHasNone) {
+  testing::TempDir dir;
+  const auto source = OpenSequence(WriteLabelledSource(dir / "source"));
+  ASSERT_TRUE(source->LabelDirectory().has_value());
+  WriteComposedSequence(*source, ComposeFrames({2, 1, 0}, 1, 2), dir / "composed", /*stereo=*/false);
+
+  const auto composed = OpenSequence(dir / "composed");
+  ASSERT_TRUE(composed->LabelDirectory().has_value());
+  ASSERT_TRUE(composed->DepthDirectory().has_value());
+  // Composed frame 0 is source frame 2: its labels and depth, unchanged (depth stays 16 bit).
+  const cv::Mat label0 = ReadUnchanged(*composed->LabelDirectory() / "000000.png");
+  const cv::Mat depth0 = ReadUnchanged(*composed->DepthDirectory() / "000000.png");
+  ASSERT_EQ(label0.type(), CV_8UC1);
+  ASSERT_EQ(depth0.type(), CV_16UC1);
+  EXPECT_EQ(label0.at<std::uint8_t>(10, 10), 2);
+  EXPECT_EQ(depth0.at<std::uint16_t>(10, 10), 1600);
+  // Frame 1 is black: nothing seen, so no label (255, Cityscapes' ignore id) and no depth.
+  const cv::Mat label1 = ReadUnchanged(*composed->LabelDirectory() / "000001.png");
+  EXPECT_EQ(cv::countNonZero(cv::Mat(label1 != 255)), 0);
+  EXPECT_EQ(cv::countNonZero(ReadUnchanged(*composed->DepthDirectory() / "000001.png")), 0);
+  EXPECT_EQ(ReadUnchanged(*composed->LabelDirectory() / "000002.png").at<std::uint8_t>(0, 0), 0);
+
+  // A source frame without its label image is refused, naming the file.
+  std::filesystem::remove(dir / "source" / "labels" / "000001.png");
+  try {
+    WriteComposedSequence(*source, ComposeFrames({0, 1}), dir / "missing", false);
+    ADD_FAILURE() << "a frame without its label image was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("000001.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("label image of frame 1 is missing"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
@@ -49,6 +50,21 @@ std::optional<std::vector<Rigid3d>> TruthByFrame(const ImageSequence& source) {
     poses.push_back(it->world_from_camera);
   }
   return poses;
+}
+
+// Cityscapes' "ignore" id: a black frame's labels say nothing was seen. Its depth is 0, "no depth".
+constexpr double kNoLabel = 255.0;
+
+// The source's label or depth image of `frame`, from a folder of per-frame images named by frame index (as
+// the synthetic city writes them), unchanged (8-bit labels, 16-bit depth). Throws InputError naming the file.
+cv::Mat LoadFrameImage(const fs::path& dir, size_t frame, std::string_view what) {
+  const fs::path path = dir / fmt::format("{:06d}.png", frame);
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, fmt::format("compose: the {} image of frame {} is missing", what, frame));
+  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw InputError(path, fmt::format("compose: cannot decode the {} image", what));
+  return image;
 }
 
 }  // namespace
@@ -101,6 +117,11 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
   stereo = stereo && source.stereo().has_value();
   fs::create_directories(out / "left");
   if (stereo) fs::create_directories(out / "right");
+  // The synthetic city's per-frame labels and depth go along, so that a composed drive can be segmented
+  // (`--segmenter truth-noisy:RATE`) and its labels measured as the source's.
+  const std::optional<fs::path> labels = source.LabelDirectory(), depth = source.DepthDirectory();
+  if (labels) fs::create_directories(out / "labels");
+  if (depth) fs::create_directories(out / "depth");
 
   const double dt = FrameInterval(source);
   const std::optional<std::vector<Rigid3d>> truth = TruthByFrame(source);
@@ -115,6 +136,16 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
       cv::Mat image = source.LoadImage(f.source_frame, camera);
       if (f.black) image = cv::Mat::zeros(image.size(), image.type());
       WritePng(out / (camera == 0 ? "left" : "right") / name, image);
+    }
+    if (labels) {
+      cv::Mat label = LoadFrameImage(*labels, f.source_frame, "label");
+      if (f.black) label.setTo(cv::Scalar::all(kNoLabel));
+      WritePng(out / "labels" / name, label);
+    }
+    if (depth) {
+      cv::Mat metres = LoadFrameImage(*depth, f.source_frame, "depth");
+      if (f.black) metres.setTo(cv::Scalar::all(0));
+      WritePng(out / "depth" / name, metres);
     }
     // A jump of k source frames takes k frame intervals, as frames dropped by a camera would.
     if (i > 0) {
@@ -138,6 +169,8 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
     yaml.baseline = source.stereo()->baseline;
     yaml.right_images = out / "right";
   }
+  if (labels) yaml.labels = out / "labels";
+  if (depth) yaml.depth = out / "depth";
   if (truth) {
     WriteKittiPoses(out / "gt.txt", truth_out);
     yaml.ground_truth = out / "gt.txt";
