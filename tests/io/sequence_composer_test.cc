@@ -88,11 +88,7 @@ std::filesystem::path WriteLabelledSource(const std::filesystem::path& dir) {
     WritePng(dir / "depth" / name, cv::Mat(48, 64, CV_16UC1, cv::Scalar(1000 + 300 * i)));
   }
   CameraYaml yaml;
-  yaml.camera.width = 64;
-  yaml.camera.height = 48;
-  yaml.camera.fx = yaml.camera.fy = 50;
-  yaml.camera.cx = 32;
-  yaml.camera.cy = 24;
+  yaml.camera = {.width = 64, .height = 48, .fx = 50, .fy = 50, .cx = 32, .cy = 24};
   yaml.images = dir / "images";
   yaml.labels = dir / "labels";
   yaml.depth = dir / "depth";

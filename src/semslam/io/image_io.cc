@@ -63,7 +63,7 @@ std::string CheckPngStructure(const std::vector<unsigned char>& bytes) {
 
 }  // namespace
 
-cv::Mat ReadImage(const fs::path& path) {
+cv::Mat ReadImageUnchanged(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, "image file not found");
   std::ifstream in(path, std::ios::binary);
@@ -83,6 +83,11 @@ cv::Mat ReadImage(const fs::path& path) {
     image.release();
   }
   if (image.empty()) throw InputError(path, "cannot decode the image (corrupt or not an image)");
+  return image;
+}
+
+cv::Mat ReadImage(const fs::path& path) {
+  cv::Mat image = ReadImageUnchanged(path);
   if (image.depth() == CV_16U) {
     image.convertTo(image, CV_8U, 1.0 / 257.0);
   } else if (image.depth() != CV_8U) {

@@ -69,6 +69,9 @@ std::vector<double> FrameTimestamps(const ImageSequence& sequence, size_t first,
 // Reads an image as 8 bits (16-bit images are scaled), grey or BGR (an alpha channel is dropped). Throws
 // InputError naming the file if it is missing or cannot be decoded.
 cv::Mat ReadImage(const std::filesystem::path& path);
+// The same checks, but the pixels as stored (16-bit depth stays 16 bit, channels as they are): for label and
+// depth images.
+cv::Mat ReadImageUnchanged(const std::filesystem::path& path);
 // Reads an 8-bit grey image, converting colour to grey.
 cv::Mat ReadGreyImage(const std::filesystem::path& path);
 // An 8-bit BGR image in grey (OpenCV's BGR2GRAY weights); an 8-bit grey image as it is.

@@ -6,7 +6,6 @@
 #include <charconv>
 #include <cmath>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
@@ -62,9 +61,7 @@ cv::Mat LoadFrameImage(const fs::path& dir, size_t frame, std::string_view what)
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     throw InputError(path, fmt::format("compose: the {} image of frame {} is missing", what, frame));
-  cv::Mat image = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
-  if (image.empty()) throw InputError(path, fmt::format("compose: cannot decode the {} image", what));
-  return image;
+  return ReadImageUnchanged(path);
 }
 
 }  // namespace
