@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <functional>
 #include <thread>
@@ -62,6 +63,30 @@ TEST_F(LocalMapperPause, RunsAgainOnlyWhenEveryHolderReleasedIt) {
   mapper.Release();
   mapper.RequestFinish();
   mapper.Join();
+  EXPECT_TRUE(mapper.IsFinished());
+}
+
+TEST_F(LocalMapperPause, TrackingWaitsUntilTheLastHolderReleasesIt) {
+  // Synchronous pacing waits out a loop correction this way (SlamSystem::ProcessFrame).
+  mapper.WaitWhilePaused();  // nobody holds it: returns at once
+  mapper.RequestStop();
+  mapper.RequestStop();
+  ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
+  std::atomic<bool> returned{false};
+  std::thread tracking([&] {
+    mapper.WaitWhilePaused();
+    returned = true;
+  });
+  mapper.Release();
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(returned) << "one holder still keeps the mapper paused";
+  mapper.Release();
+  EXPECT_TRUE(WaitFor([&] { return returned.load(); }));
+  tracking.join();
+  mapper.RequestFinish();
+  mapper.Join();
+  mapper.RequestStop();
+  mapper.WaitWhilePaused();  // a finished mapper never pauses: returns at once
   EXPECT_TRUE(mapper.IsFinished());
 }
 

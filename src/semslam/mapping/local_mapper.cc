@@ -116,6 +116,12 @@ void LocalMapper::Release() {
   queue_cv_.notify_all();
 }
 
+void LocalMapper::WaitWhilePaused() {
+  // Release() notifies under the queue mutex, so no wake-up is lost between the check and the wait.
+  std::unique_lock lock(queue_mutex_);
+  queue_cv_.wait(lock, [this] { return !StopRequested() || !thread_.joinable() || finished_.load(); });
+}
+
 bool LocalMapper::SetNotStop(bool value) {
   std::lock_guard lock(stop_mutex_);
   if (value && stopped_) return false;

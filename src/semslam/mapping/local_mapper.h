@@ -64,6 +64,8 @@ class LocalMapper {
   bool IsStopped() const;
   bool StopRequested() const;
   void Release();
+  // Blocks while a holder keeps the mapper paused; returns at once when none does, or once the thread ended.
+  void WaitWhilePaused();
   // Tracking marks a keyframe insertion in progress so the mapper does not stop under it. Returns false
   // if the mapper is already stopped.
   bool SetNotStop(bool value);

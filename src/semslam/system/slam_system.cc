@@ -178,8 +178,15 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   if (segmentation_) SubmitForSegmentation(frame_id, color.empty() ? left : color, result);
   if (result.state == TrackingState::kOk) ++tracked_;
   if (result.reset_requested) DiscardActiveMap();
-  if (options_.pacing == Pacing::kSynchronous && (result.new_keyframe || result.initialized_now)) {
-    mapper_->WaitUntilIdle();
+  if (options_.pacing == Pacing::kSynchronous) {
+    if (result.new_keyframe || result.initialized_now) mapper_->WaitUntilIdle();
+    // A loop correction or map merge holding the mapper is waited out too, so that a drive played this way
+    // sees corrections as instant. Going on, tracking could add no keyframe while the mapper was held and
+    // drove off its points (seed 8888's merge after a black-out: two frames lost).
+    if (mapper_->StopRequested()) {
+      ScopedTimer timer(timing_, "waiting_for_correction");
+      mapper_->WaitWhilePaused();
+    }
   } else if (options_.max_queued_keyframes > 0 && result.new_keyframe && !options_.localization_only) {
     ScopedTimer timer(timing_, "waiting_for_mapping");
     mapper_->WaitForQueueAtMost(static_cast<size_t>(options_.max_queued_keyframes));
