@@ -111,7 +111,7 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option(
          "--pacing", args->pacing,
          "fast: frames as fast as tracking goes; realtime: at the camera's rate (default); synchronous: "
-         "wait for mapping after each keyframe (reproducible)")
+         "wait for mapping after each keyframe and for loop corrections (reproducible)")
       ->check(CLI::IsMember({"fast", "realtime", "synchronous"}));
   cmd->add_option("--vocabulary", args->vocabulary,
                   "Bag-of-words vocabulary (default: data/vocabulary/semslam.voc)")

@@ -36,7 +36,8 @@ class KeyFrameDatabase;
 enum class SensorMode { kMonocular, kStereo };
 
 // How frames are fed: as fast as possible, at the camera's rate (timestamps), or waiting for the mapper
-// after every keyframe (reproducible results for tests and evaluation).
+// after every keyframe and while a loop correction or merge holds it (reproducible results for tests and
+// evaluation).
 enum class Pacing { kFast, kRealtime, kSynchronous };
 
 // "mono"/"stereo" and "fast"/"realtime"/"synchronous", as on the command line and in config files;
