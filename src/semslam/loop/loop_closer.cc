@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <unordered_map>
 
@@ -36,6 +37,8 @@ void LoopCloserOptions::Check() const {
   Require(min_verified_neighbours >= 0 && min_verified_neighbours <= 5 && verification_matches >= 3,
           "loop closer: min_verified_neighbours must be in [0, 5] and verification_matches >= 3");
   Require(max_depth_ratio > 1.0, "loop closer: max_depth_ratio must be > 1");
+  Require(max_refined_depth_ratio > 1.0 && max_refined_depth_ratio <= max_depth_ratio,
+          "loop closer: max_refined_depth_ratio must be in (1, max_depth_ratio]");
   Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,
           "loop closer: max_stereo_correction_ratio must be positive and stereo_correction_slack_m >= 0");
   Require(stereo_rotation_slack_deg >= 0 && max_stereo_rotation_deg_per_100m >= 0 &&
@@ -290,8 +293,7 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
     }
     SearchBySim3(*current, *candidate, guided, solution->camera1_from_camera2, 7.5f);
     Sim3d current_from_candidate = solution->camera1_from_camera2;
-    const int inliers =
-        RefineSim3(*current, *candidate, guided, &current_from_candidate, 10.0, options_.fix_scale);
+    const int inliers = RefineLoopSim3(*current, *candidate, guided, &current_from_candidate);
     if (inliers < options_.min_sim3_inliers) continue;
     if (!AgreesWithStructure(*current, *candidate, guided, current_from_candidate)) continue;
 
@@ -334,17 +336,36 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
   return false;
 }
 
+namespace {
+
+bool WithinFactor(double ratio, double factor) { return ratio <= factor && ratio * factor >= 1.0; }
+
+}  // namespace
+
+int LoopCloser::RefineLoopSim3(const KeyFrame& current, const KeyFrame& candidate,
+                               std::vector<MapPoint*>& matches, Sim3d* current_from_candidate) const {
+  constexpr double kChi2 = 10.0;
+  if (options_.fix_scale) return RefineSim3(current, candidate, matches, current_from_candidate, kChi2, true);
+  const MonocularSim3Refinement refined = RefineSim3KeepingStructureScale(
+      current, candidate, matches, current_from_candidate, kChi2, options_.max_refined_depth_ratio);
+  if (refined.scale_held) {
+    spdlog::info(
+        "loop candidate: keyframe {} with keyframe {}: the refinement's scale {:.3f} put the matched "
+        "points at {:.2f} times their own depth; refined again at the structures' scale {:.3f}",
+        current.id(), candidate.id(), refined.free_scale, 1.0 / refined.free_depth_ratio,
+        current_from_candidate->scale);
+  }
+  return refined.inliers;
+}
+
 bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& candidate,
                                      const std::vector<MapPoint*>& matches,
                                      const Sim3d& current_from_candidate) const {
-  Points3d points_current, points_candidate;
-  for (const KeyFramePointMatch& m : MatchesInCameraFrames(current, candidate, matches)) {
-    points_current.push_back(m.point1);
-    points_candidate.push_back(m.point2);
-  }
-  if (points_current.empty()) return false;
-  const double ratio = MedianDepthRatio(current_from_candidate, points_current, points_candidate);
-  const bool agrees = ratio <= options_.max_depth_ratio && ratio * options_.max_depth_ratio >= 1.0;
+  const std::optional<double> structure_ratio =
+      StructureDepthRatio(current, candidate, matches, current_from_candidate);
+  if (!structure_ratio) return false;
+  const double ratio = *structure_ratio;
+  const bool agrees = WithinFactor(ratio, options_.max_depth_ratio);
   spdlog::info(
       "loop candidate: keyframe {} with keyframe {}: its transform (scale {:.3f}) puts the matched points at {:.2f} "
       "times their own depth (limit {:.2f}){}",

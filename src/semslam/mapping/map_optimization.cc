@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <shared_mutex>
 #include <unordered_map>
@@ -11,6 +12,7 @@
 
 #include "semslam/core/error.h"
 #include "semslam/core/timing.h"
+#include "semslam/geometry/sim3_solver.h"
 #include "semslam/map/keyframe_matches.h"
 #include "semslam/optim/sim3_optimization.h"
 
@@ -322,6 +324,39 @@ int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>&
   }
   *kf1_from_kf2 = result.camera1_from_camera2;
   return inliers;
+}
+
+std::optional<double> StructureDepthRatio(const KeyFrame& kf1, const KeyFrame& kf2,
+                                          const std::vector<MapPoint*>& matches12,
+                                          const Sim3d& kf1_from_kf2) {
+  Points3d points1, points2;
+  for (const KeyFramePointMatch& m : MatchesInCameraFrames(kf1, kf2, matches12)) {
+    points1.push_back(m.point1);
+    points2.push_back(m.point2);
+  }
+  if (points1.empty()) return std::nullopt;
+  return MedianDepthRatio(kf1_from_kf2, points1, points2);
+}
+
+MonocularSim3Refinement RefineSim3KeepingStructureScale(const KeyFrame& kf1, const KeyFrame& kf2,
+                                                        std::vector<MapPoint*>& matches12,
+                                                        Sim3d* kf1_from_kf2, double chi2_threshold,
+                                                        double max_depth_ratio) {
+  Require(std::isfinite(max_depth_ratio) && max_depth_ratio > 1.0,
+          "sim3 refinement: max_depth_ratio must be > 1");
+  const std::vector<MapPoint*> initial_matches = matches12;
+  MonocularSim3Refinement refinement;
+  refinement.inliers = RefineSim3(kf1, kf2, matches12, kf1_from_kf2, chi2_threshold, /*fix_scale=*/false);
+  refinement.free_scale = kf1_from_kf2->scale;
+  const std::optional<double> ratio = StructureDepthRatio(kf1, kf2, matches12, *kf1_from_kf2);
+  refinement.free_depth_ratio = ratio.value_or(0.0);
+  if (!ratio || (*ratio <= max_depth_ratio && *ratio * max_depth_ratio >= 1.0)) return refinement;
+  // The scale at which the matched points would keep their own depth (exactly so for cameras at one place).
+  refinement.scale_held = true;
+  matches12 = initial_matches;
+  kf1_from_kf2->scale *= *ratio;
+  refinement.inliers = RefineSim3(kf1, kf2, matches12, kf1_from_kf2, chi2_threshold, /*fix_scale=*/true);
+  return refinement;
 }
 
 }  // namespace semslam

@@ -93,6 +93,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"min_verified_neighbours", Bind(&o->loop.min_verified_neighbours)},
       {"verification_matches", Bind(&o->loop.verification_matches)},
       {"max_depth_ratio", Bind(&o->loop.max_depth_ratio)},
+      {"max_refined_depth_ratio", Bind(&o->loop.max_refined_depth_ratio)},
       {"max_stereo_correction_ratio", Bind(&o->loop.max_stereo_correction_ratio)},
       {"stereo_correction_slack_m", Bind(&o->loop.stereo_correction_slack_m)},
       {"stereo_rotation_slack_deg", Bind(&o->loop.stereo_rotation_slack_deg)},
