@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <vector>
 
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
@@ -17,7 +19,7 @@
 namespace semslam {
 namespace {
 
-// Two keyframes `baseline` metres apart sideways, each of its own map: keyframe 2's map is `map2_scale` times
+// Two keyframes `baseline` metres apart sideways, each of its own map: keyframe 2's map is kMap2Scale times
 // the world. Both see the same 300 points 10-40 m ahead; keypoints carry `pixel_noise` pixels of noise and
 // each map's points `depth_noise` of their depth along the ray (a monocular map's triangulation).
 // `keypoints2_baseline`, when given, is where keyframe 2's keypoints were seen from instead: its points and
@@ -47,14 +49,12 @@ class TwoMonocularKeyframes : public ::testing::Test {
     const Eigen::Vector3d seen_from2(keypoints2_baseline < 0 ? baseline : keypoints2_baseline, 0.0, 0.0);
     kf2_ = AddKeyFrame(1, camera, Rigid3d(Eigen::Quaterniond::Identity(), -kMap2Scale * center2), world,
                        seen_from2, pixel_noise, rng);
-    std::vector<MapPoint*> points1, points2;
+    matches12_.clear();
     for (size_t j = 0; j < world.size(); ++j) {
-      points1.push_back(
-          AddPoint(kf1_, static_cast<int>(j), world[j], center1, 1.0, depth_noise * gauss(rng)));
-      points2.push_back(
+      AddPoint(kf1_, static_cast<int>(j), world[j], center1, 1.0, depth_noise * gauss(rng));
+      matches12_.push_back(
           AddPoint(kf2_, static_cast<int>(j), world[j], center2, kMap2Scale, depth_noise * gauss(rng)));
     }
-    matches12_ = points2;
     // kf1_from_kf2: camera 2's frame of map 2, scaled up to the world, then into camera 1's.
     truth_ = Sim3d(1.0 / kMap2Scale, Eigen::Quaterniond::Identity(), center2 - center1);
   }
