@@ -65,4 +65,7 @@ int ClassifySim3Inliers(const Sim3d& camera1_from_camera2, const Sim3Corresponde
 // to a scale near 0. Throws InvalidArgument for no matches, mismatched sizes or non-finite points.
 double MedianDepthRatio(const Sim3d& camera1_from_camera2, const Points3d& points1, const Points3d& points2);
 
+// Whether such a ratio lies within `factor` (> 1) of 1, either way.
+inline bool DepthRatioWithin(double ratio, double factor) { return ratio <= factor && ratio * factor >= 1.0; }
+
 }  // namespace semslam

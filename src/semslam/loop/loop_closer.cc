@@ -336,12 +336,6 @@ bool LoopCloser::ComputeSim3(KeyFrame* current) {
   return false;
 }
 
-namespace {
-
-bool WithinFactor(double ratio, double factor) { return ratio <= factor && ratio * factor >= 1.0; }
-
-}  // namespace
-
 int LoopCloser::RefineLoopSim3(const KeyFrame& current, const KeyFrame& candidate,
                                std::vector<MapPoint*>& matches, Sim3d* current_from_candidate) const {
   constexpr double kChi2 = 10.0;
@@ -365,7 +359,7 @@ bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& ca
       StructureDepthRatio(current, candidate, matches, current_from_candidate);
   if (!structure_ratio) return false;
   const double ratio = *structure_ratio;
-  const bool agrees = WithinFactor(ratio, options_.max_depth_ratio);
+  const bool agrees = DepthRatioWithin(ratio, options_.max_depth_ratio);
   spdlog::info(
       "loop candidate: keyframe {} with keyframe {}: its transform (scale {:.3f}) puts the matched points at {:.2f} "
       "times their own depth (limit {:.2f}){}",

@@ -351,7 +351,7 @@ MonocularSim3Refinement RefineSim3KeepingStructureScale(const KeyFrame& kf1, con
   const std::optional<double> ratio = StructureDepthRatio(kf1, kf2, matches12, *kf1_from_kf2);
   refinement.free_depth_ratio = ratio.value_or(0.0);
   if (!ratio || !std::isfinite(*ratio) || *ratio <= 0.0) return refinement;  // nothing to rescale by
-  if (*ratio <= max_depth_ratio && *ratio * max_depth_ratio >= 1.0) return refinement;
+  if (DepthRatioWithin(*ratio, max_depth_ratio)) return refinement;
   // The scale at which the matched points would keep their own depth (exactly so for cameras at one place).
   refinement.scale_held = true;
   matches12 = initial_matches;
