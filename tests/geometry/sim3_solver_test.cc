@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -146,6 +147,25 @@ TEST(MedianDepthRatio, TellsACollapsedScaleThatReprojectionCannot) {
   EXPECT_GT(MedianDepthRatio(collapsed, m.correspondences.points1, m.correspondences.points2), 1000.0);
   const Sim3d too_large(2.6, kTruth.rotation, Eigen::Vector3d::Zero());
   EXPECT_NEAR(MedianDepthRatio(too_large, m.correspondences.points1, m.correspondences.points2), 0.5, 0.05);
+}
+
+// The loop closer's refusal (factor 1.5) and the refinement's hold (1.15) both read a ratio this way:
+// symmetric in ratio and 1/ratio, the bounds included, and nothing that is not a positive number passes.
+TEST(DepthRatioWithin, IsSymmetricAboutOneAndRefusesNonNumbers) {
+  EXPECT_TRUE(DepthRatioWithin(1.0, 1.15));
+  EXPECT_TRUE(DepthRatioWithin(2.0, 2.0));  // the bounds, exactly representable
+  EXPECT_TRUE(DepthRatioWithin(0.5, 2.0));
+  EXPECT_FALSE(DepthRatioWithin(0.49, 2.0));
+  EXPECT_TRUE(DepthRatioWithin(1.1, 1.15));
+  EXPECT_TRUE(DepthRatioWithin(1.0 / 1.1, 1.15));
+  EXPECT_FALSE(DepthRatioWithin(1.16, 1.15));
+  EXPECT_FALSE(DepthRatioWithin(1.0 / 1.16, 1.15));
+  EXPECT_TRUE(DepthRatioWithin(1.49, 1.5));  // the uninterrupted seed-4711 loop the hold caught at 1.15
+  EXPECT_FALSE(DepthRatioWithin(1.49, 1.15));
+  EXPECT_FALSE(DepthRatioWithin(0.0, 1.5));
+  EXPECT_FALSE(DepthRatioWithin(-1.0, 1.5));
+  EXPECT_FALSE(DepthRatioWithin(std::nan(""), 1.5));
+  EXPECT_FALSE(DepthRatioWithin(std::numeric_limits<double>::infinity(), 1.5));
 }
 
 TEST(MedianDepthRatio, BadInputThrows) {
