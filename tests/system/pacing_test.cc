@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 
 #include "semslam/core/error.h"
 
@@ -49,6 +51,25 @@ TEST(RealtimePacer, TimeGoingBackIsAGap) {
   pacer.DelaySeconds(50.0);
   EXPECT_EQ(pacer.DelaySeconds(10.0), 0.0);
   EXPECT_EQ(pacer.gaps(), 1);
+}
+
+TEST(RealtimePacer, SlackIsCountedInFrameIntervalsFromWhenTheFrameWasDue) {
+  RealtimePacer pacer;
+  pacer.DelaySeconds(10.0);
+  EXPECT_EQ(pacer.SlackSeconds(1.0), 0.0);   // no frame interval known yet
+  ASSERT_GT(pacer.DelaySeconds(11.0), 0.0);  // not due yet: the whole slack is left
+  EXPECT_DOUBLE_EQ(pacer.SlackSeconds(1.0), 1.0);
+  EXPECT_DOUBLE_EQ(pacer.SlackSeconds(0.5), 0.5);
+  EXPECT_EQ(pacer.SlackSeconds(0.0), 0.0);
+
+  RealtimePacer late;
+  late.DelaySeconds(10.0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(late.DelaySeconds(10.001), 0.0);  // 49 ms late
+  EXPECT_EQ(late.SlackSeconds(1.0), 0.0);     // more than one 1 ms interval late: none left
+  EXPECT_LE(late.SlackSeconds(100.0), 0.1 - 0.049 + 1e-9);
+  EXPECT_EQ(late.DelaySeconds(500.0), 0.0);  // a gap
+  EXPECT_EQ(late.SlackSeconds(100.0), 0.0);
 }
 
 TEST(RealtimePacer, BadOptionsAreRefused) {

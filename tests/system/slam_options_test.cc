@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "semslam/core/error.h"
@@ -37,6 +38,17 @@ TEST(SlamOptions, ConfigPacingReadWrittenAndRejected) {
     EXPECT_NE(std::string(e.what()).find("fast, realtime or synchronous"), std::string::npos) << e.what();
   }
   EXPECT_EQ(options.pacing, Pacing::kSynchronous);
+}
+
+TEST(SlamOptions, RealtimeWaitForMappingIsBounded) {
+  SlamOptions options;
+  EXPECT_NO_THROW(options.Check());
+  for (const double frames : {-0.5, 10.5, std::nan("")}) {
+    options.realtime_wait_for_mapping_frames = frames;
+    EXPECT_THROW(options.Check(), InvalidArgument) << frames;
+  }
+  options.realtime_wait_for_mapping_frames = 0.0;  // never wait
+  EXPECT_NO_THROW(options.Check());
 }
 
 }  // namespace

@@ -82,6 +82,17 @@ void LocalMapper::WaitUntilIdle() {
   queue_cv_.wait(lock, [this] { return (queue_.empty() && !busy_) || !thread_.joinable(); });
 }
 
+bool LocalMapper::WaitUntilIdleFor(double seconds) {
+  std::unique_lock lock(queue_mutex_);
+  return queue_cv_.wait_for(lock, std::chrono::duration<double>(std::max(0.0, seconds)),
+                            [this] { return (queue_.empty() && !busy_) || !thread_.joinable(); });
+}
+
+bool LocalMapper::IsIdle() const {
+  std::lock_guard lock(queue_mutex_);
+  return queue_.empty() && !busy_;
+}
+
 void LocalMapper::WaitForQueueAtMost(size_t n) {
   std::unique_lock lock(queue_mutex_);
   queue_cv_.wait(lock, [this, n] { return queue_.size() <= n || !thread_.joinable() || finished_.load(); });

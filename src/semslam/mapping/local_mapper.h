@@ -54,6 +54,9 @@ class LocalMapper {
   void InterruptBA() { abort_ba_.store(true); }
   // Blocks until every queued keyframe is processed and the thread is idle.
   void WaitUntilIdle();
+  // The same for at most `seconds`; whether the mapper is idle.
+  bool WaitUntilIdleFor(double seconds);
+  bool IsIdle() const;
   // Blocks until at most `n` keyframes wait in the queue (the mapper is working through them).
   void WaitForQueueAtMost(size_t n);
 

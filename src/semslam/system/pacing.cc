@@ -30,6 +30,7 @@ double RealtimePacer::DelaySeconds(double timestamp) {
     }
     ++gaps_;
   }
+  last_interval_s_ = last_timestamp_ && !gap ? timestamp - *last_timestamp_ : 0.0;
   last_timestamp_ = timestamp;
   if (!clock_ || gap) {
     clock_.emplace();
@@ -40,6 +41,12 @@ double RealtimePacer::DelaySeconds(double timestamp) {
   if (wait_s <= 0) return 0.0;
   // Between frames no more than a gap's worth, whatever the clock says.
   return std::min(wait_s, options_.max_gap_s);
+}
+
+double RealtimePacer::SlackSeconds(double frame_intervals) const {
+  if (!clock_ || !last_timestamp_ || !(last_interval_s_ > 0) || !(frame_intervals > 0)) return 0.0;
+  const double late_s = clock_->ElapsedSeconds() - (*last_timestamp_ - anchor_timestamp_);
+  return std::max(0.0, frame_intervals * last_interval_s_ - std::max(0.0, late_s));
 }
 
 void RealtimePacer::Wait(double timestamp) {

@@ -25,6 +25,10 @@ class RealtimePacer {
   double DelaySeconds(double timestamp);
   // Sleeps for DelaySeconds(timestamp).
   void Wait(double timestamp);
+  // After DelaySeconds or Wait for a frame: how much longer it may wait for other work and still be taken
+  // within `frame_intervals` of the camera's frame interval after it was due. 0 at the first frame and after
+  // a gap (no interval known), and once the frame is that late.
+  double SlackSeconds(double frame_intervals) const;
 
   // How many times the clock was re-anchored at a gap.
   int gaps() const { return gaps_; }
@@ -34,6 +38,7 @@ class RealtimePacer {
   std::optional<Stopwatch> clock_;
   double anchor_timestamp_ = 0.0;
   std::optional<double> last_timestamp_;
+  double last_interval_s_ = 0.0;  // 0: unknown
   int gaps_ = 0;
 };
 

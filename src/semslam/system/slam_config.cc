@@ -81,6 +81,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"final_refine_intrinsics_min_reduction", Bind(&o->final_refine_intrinsics_min_reduction)},
       {"final_refine_intrinsics_min_keyframes", Bind(&o->final_refine_intrinsics_min_keyframes)},
       {"max_queued_keyframes", Bind(&o->max_queued_keyframes)},
+      {"realtime_wait_for_mapping_frames", Bind(&o->realtime_wait_for_mapping_frames)},
       {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
   };
   s["loop"] = {

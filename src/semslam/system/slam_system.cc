@@ -42,6 +42,9 @@ std::string_view PacingName(Pacing pacing) {
 
 void SlamOptions::Check() const {
   Require(max_queued_keyframes >= 0, "max_queued_keyframes must be >= 0");
+  Require(std::isfinite(realtime_wait_for_mapping_frames) && realtime_wait_for_mapping_frames >= 0 &&
+              realtime_wait_for_mapping_frames <= 10,
+          "realtime_wait_for_mapping_frames must be in [0, 10]");
   Require(final_global_ba_iterations >= 1, "final_global_ba_iterations must be >= 1");
   Require(std::isfinite(final_refine_intrinsics_min_reduction) && final_refine_intrinsics_min_reduction >= 0 &&
               final_refine_intrinsics_min_reduction < 1,
@@ -172,7 +175,14 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                                         const cv::Mat& right, const cv::Mat& mask, const cv::Mat& color) {
   Require(!finished_, "ProcessFrame after Finish");
-  if (options_.pacing == Pacing::kRealtime) pacer_.Wait(timestamp);  // no faster than the camera recorded
+  if (options_.pacing == Pacing::kRealtime) {
+    pacer_.Wait(timestamp);  // no faster than the camera recorded
+    const double slack_s = pacer_.SlackSeconds(options_.realtime_wait_for_mapping_frames);
+    if (slack_s > 0 && !mapper_->IsIdle()) {
+      ScopedTimer timer(timing_, "waiting_for_keyframe_mapping");
+      mapper_->WaitUntilIdleFor(slack_s);
+    }
+  }
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
   if (segmentation_) SubmitForSegmentation(frame_id, color.empty() ? left : color, result);

@@ -70,6 +70,11 @@ struct SlamOptions {
   // Keyframes waiting for the mapper: with more, tracking waits for it (on a busy machine a mapper that falls
   // behind leaves tracking without the points it needs at the next turn). 0: never wait.
   int max_queued_keyframes = 2;
+  // Realtime pacing: a frame due while the mapper still works on a keyframe waits for it, up to this many of
+  // the camera's frame intervals past when it was due. The frames after a keyframe are then tracked in the
+  // map that keyframe completes, as at synchronous pacing, wherever the machine keeps up, so that the
+  // keyframes and points of a drive depend on pacing only where it does not. 0: never wait.
+  double realtime_wait_for_mapping_frames = 1.0;
   int final_global_ba_iterations = 20;
 
   void Check() const;
