@@ -1,4 +1,7 @@
-// The local mapper's pause protocol, which the loop closer, its global BA and a map reset share.
+// The local mapper's pause protocol, which the loop closer, its global BA and a map reset share, and the
+// bounded wait for it that realtime pacing uses.
+
+#include "semslam/mapping/local_mapper.h"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +12,9 @@
 
 #include "semslam/core/timing.h"
 #include "semslam/map/map.h"
-#include "semslam/mapping/local_mapper.h"
 #include "semslam/place/keyframe_database.h"
 #include "semslam/place/vocabulary.h"
+#include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
@@ -97,6 +100,32 @@ TEST_F(LocalMapperPause, AReleaseWithoutARequestChangesNothing) {
   ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
   mapper.Release();
   ASSERT_TRUE(WaitFor([&] { return !mapper.IsStopped(); }));
+  mapper.RequestFinish();
+  mapper.Join();
+  EXPECT_TRUE(mapper.IsFinished());
+}
+
+TEST_F(LocalMapperPause, AWaitForIdleGivesUpAfterItsTime) {
+  EXPECT_TRUE(mapper.IsIdle());
+  EXPECT_TRUE(mapper.WaitUntilIdleFor(5.0));  // nothing to do: returns at once
+
+  // A keyframe waits in the queue of a paused mapper: realtime pacing's wait must not block on it.
+  mapper.RequestStop();
+  ASSERT_TRUE(WaitFor([&] { return mapper.IsStopped(); }));
+  const PinholeCamera camera = KittiCamera();
+  FeatureSet no_features;
+  no_features.image_width = camera.width;
+  no_features.image_height = camera.height;
+  KeyFrame* waiting =
+      map.AddKeyFrame(Frame(0, 0.0, MakeFrameData(camera, std::nullopt, std::move(no_features), {}, {})));
+  mapper.InsertKeyFrame(waiting);
+  EXPECT_FALSE(mapper.IsIdle());
+  EXPECT_FALSE(mapper.WaitUntilIdleFor(0.02));
+
+  mapper.Reset();  // the keyframe is dropped unprocessed
+  EXPECT_TRUE(mapper.IsIdle());
+  EXPECT_TRUE(mapper.WaitUntilIdleFor(5.0));
+  mapper.Release();
   mapper.RequestFinish();
   mapper.Join();
   EXPECT_TRUE(mapper.IsFinished());
