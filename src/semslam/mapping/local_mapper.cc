@@ -79,18 +79,18 @@ bool LocalMapper::HasNewKeyFrames() const { return KeyframesInQueue() > 0; }
 
 void LocalMapper::WaitUntilIdle() {
   std::unique_lock lock(queue_mutex_);
-  queue_cv_.wait(lock, [this] { return (queue_.empty() && !busy_) || !thread_.joinable(); });
+  queue_cv_.wait(lock, [this] { return IdleLocked() || !thread_.joinable(); });
 }
 
 bool LocalMapper::WaitUntilIdleFor(double seconds) {
   std::unique_lock lock(queue_mutex_);
   return queue_cv_.wait_for(lock, std::chrono::duration<double>(std::max(0.0, seconds)),
-                            [this] { return (queue_.empty() && !busy_) || !thread_.joinable(); });
+                            [this] { return IdleLocked() || !thread_.joinable(); });
 }
 
 bool LocalMapper::IsIdle() const {
   std::lock_guard lock(queue_mutex_);
-  return queue_.empty() && !busy_;
+  return IdleLocked();
 }
 
 void LocalMapper::WaitForQueueAtMost(size_t n) {

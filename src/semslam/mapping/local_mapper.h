@@ -102,6 +102,8 @@ class LocalMapper {
   std::deque<KeyFrame*> queue_;
   KeyFrame* current_ = nullptr;
   bool busy_ = false;
+  // Under queue_mutex_: nothing queued and nothing being processed.
+  bool IdleLocked() const { return queue_.empty() && !busy_; }
 
   std::atomic<bool> accept_keyframes_{true};
   std::atomic<bool> abort_ba_{false};
