@@ -207,6 +207,49 @@ TEST_F(DisturbedStreet, SelfCalibrationIsLeftToMapsOfEnoughKeyFrames) {
   EXPECT_LT(RmsPointError(), 0.2 * points_before) << "the plain BA ran instead";
 }
 
+// A monocular BA may stretch the map around a keyframe (a young map settling after a merge); what is kept
+// relative to the keyframe (its frames) must stretch with it.
+class StretchedStreet : public DisturbedStreet {
+ protected:
+  static constexpr double kStretch = 1.05;
+
+  // Keyframes 3 and 10 and their points, stretched by kStretch about the origin; keyframe 17 moves but none
+  // of its points (they see different stretches of the street: 2-14 m ahead, 2 m apart).
+  GlobalBundleAdjustmentResult Stretched() const {
+    GlobalBundleAdjustmentResult result;
+    for (const int k : {3, 10})
+      result.camera_from_world[keyframes_[k]] =
+          Rigid3d(Eigen::Quaterniond::Identity(), -kStretch * Center(k));
+    result.camera_from_world[keyframes_[17]] = keyframes_[17]->camera_from_world();
+    for (MapPoint* p : points_) {
+      if (p != nullptr && p->observations().count(keyframes_[17]) == 0)
+        result.positions[p] = kStretch * p->position();
+    }
+    return result;
+  }
+};
+
+TEST_F(StretchedStreet, KeyFramesFollowTheStretchAroundThem) {
+  const GlobalBundleAdjustmentResult result = Stretched();
+  const std::unordered_map<KeyFrame*, double> changes = LocalScaleChanges(result);
+  EXPECT_EQ(changes.size(), 2u) << "keyframe 17: none of its points moved";
+  EXPECT_NEAR(changes.at(keyframes_[3]), kStretch, 1e-9);
+  EXPECT_NEAR(changes.at(keyframes_[10]), kStretch, 1e-9);
+  auto lock = map_.WriteLock();
+  WriteGlobalBundleAdjustment(map_, result, /*follow_local_scale=*/true);
+  EXPECT_NEAR(keyframes_[3]->scale_correction(), kStretch, 1e-9);
+  EXPECT_NEAR(keyframes_[10]->scale_correction(), kStretch, 1e-9);
+  EXPECT_EQ(keyframes_[17]->scale_correction(), 1.0);
+  EXPECT_EQ(keyframes_[5]->scale_correction(), 1.0) << "not in the result";
+}
+
+TEST_F(StretchedStreet, WithoutFollowingTheKeyFramesKeepTheirUnits) {
+  auto lock = map_.WriteLock();
+  WriteGlobalBundleAdjustment(map_, Stretched());
+  EXPECT_EQ(keyframes_[3]->scale_correction(), 1.0);
+  EXPECT_NEAR(keyframes_[3]->center().z(), kStretch * Center(3).z(), 1e-9) << "the poses were written";
+}
+
 // Every tenth point is matched wrongly in every fourth keyframe: one observation in seven of those points, as a
 // look-alike facade gives.
 class StreetWithWrongMatches : public DisturbedStreet {

@@ -289,6 +289,8 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   {
     auto lock = map_.WriteLock();
+    // Monocular: the frames kept relative to a keyframe stretch with the map around it.
+    if (!options_.fix_scale) FollowLocalScaleChanges(LocalScaleChanges(adjusted));
     DropObservations(map_, adjusted.outliers);
     // Corrections before -> after per keyframe, propagated down the spanning tree.
     std::unordered_map<KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)

@@ -211,7 +211,36 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
   return result;
 }
 
-void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result) {
+std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
+                                                        int min_points) {
+  std::unordered_map<KeyFrame*, double> changes;
+  std::vector<double> ratios;
+  for (const auto& [kf, camera_from_world] : result.camera_from_world) {
+    if (kf->is_bad()) continue;
+    ratios.clear();
+    for (MapPoint* p : kf->map_points()) {
+      if (p == nullptr || p->is_bad()) continue;
+      const auto moved = result.positions.find(p);
+      if (moved == result.positions.end()) continue;
+      const double before = (kf->camera_from_world() * p->position()).z();
+      const double after = (camera_from_world * moved->second).z();
+      if (before > 0.0 && after > 0.0 && std::isfinite(after / before)) ratios.push_back(after / before);
+    }
+    if (ratios.size() < static_cast<size_t>(std::max(1, min_points))) continue;
+    const auto middle = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
+    std::nth_element(ratios.begin(), middle, ratios.end());
+    changes[kf] = *middle;
+  }
+  return changes;
+}
+
+void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes) {
+  for (const auto& [kf, change] : changes) kf->CorrectScale(change);
+}
+
+void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
+                                 bool follow_local_scale) {
+  if (follow_local_scale) FollowLocalScaleChanges(LocalScaleChanges(result));
   DropObservations(map, result.outliers);
   for (const auto& [kf, camera_from_world] : result.camera_from_world) {
     if (!kf->is_bad()) kf->SetPose(camera_from_world);
@@ -224,7 +253,8 @@ void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& r
 }
 
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options) {
-  WriteGlobalBundleAdjustment(map, AdjustMapInWindows(map, map_id, options, /*lock_map=*/false));
+  WriteGlobalBundleAdjustment(map, AdjustMapInWindows(map, map_id, options, /*lock_map=*/false),
+                              options.follow_local_scale);
   ReleaseFreeMemory();
 }
 
@@ -261,7 +291,15 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
   WindowProblem whole = BuildWindowProblem(keyframes, {}, {});
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
+  // The keyframes follow the stretch of each solution the map takes (the problem holds it after the solve).
+  const auto follow_local_scale = [&](const BundleAdjustmentResult& solved) {
+    if (!options.follow_local_scale) return;
+    GlobalBundleAdjustmentResult moved;
+    KeepWindow(whole, solved, /*drop_outliers=*/false, &moved);
+    FollowLocalScaleChanges(LocalScaleChanges(moved));
+  };
   const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
+  follow_local_scale(plain);
   ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs,
                         options.drop_outliers);
   refinement.plain_cost = plain.final_capped_chi2;
@@ -287,6 +325,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
       refinement.reason = "the radial distortion came out above 0.2";
     } else {
       refinement.accepted = true;
+      follow_local_scale(result);
       ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, {}, false);
     }
   }

@@ -54,6 +54,9 @@ struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
   int window_keyframes = 500;
   bool drop_outliers = true;
+  // Monocular: each keyframe follows the stretch the BA gives the map around it (LocalScaleChanges), so that
+  // the frames kept relative to it stretch too.
+  bool follow_local_scale = false;
   // Set (from another thread) to stop after the current solver iteration; no later window starts.
   std::atomic<bool>* abort = nullptr;
 
@@ -80,9 +83,22 @@ std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_
 GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
                                                 const GlobalBundleAdjustmentOptions& options, bool lock_map);
 
+// How much a monocular BA stretches the map around each keyframe it moves: the median, over the keyframe's
+// points the BA also moved, of their depth after over their depth before ("before" is the map as it is: call
+// it before writing the result). Keyframes with fewer than `min_points` such points are left out. A frame's
+// pose is kept relative to a keyframe in the units of the map there when it was tracked
+// (KeyFrame::scale_correction); a BA that undid part of a merge's stretch along a young map left its frames
+// 3-4 % long between keyframes, a sawtooth 0.3 m behind over its first 40 frames.
+std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
+                                                        int min_points = 20);
+
+// KeyFrame::CorrectScale by each change. Write lock.
+void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes);
+
 // Writes the result into the map (skipping what turned bad), drops its outlier observations and updates the
-// points' normals. Write lock.
-void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result);
+// points' normals; with `follow_local_scale`, the keyframes follow LocalScaleChanges first. Write lock.
+void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
+                                 bool follow_local_scale = false);
 
 // Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options);

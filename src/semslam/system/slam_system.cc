@@ -276,6 +276,7 @@ void SlamSystem::Finish() {
     GlobalBundleAdjustmentOptions global_ba;
     global_ba.iterations = options_.final_global_ba_iterations;
     global_ba.window_keyframes = options_.loop.global_ba_window_keyframes;
+    global_ba.follow_local_scale = options_.mode == SensorMode::kMonocular;
     SelfCalibrationOptions calibration;
     calibration.min_cost_reduction = options_.final_refine_intrinsics_min_reduction;
     calibration.min_keyframes = options_.final_refine_intrinsics_min_keyframes;
