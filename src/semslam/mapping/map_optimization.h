@@ -88,7 +88,7 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
 // it before writing the result). Keyframes with fewer than `min_points` such points are left out. A frame's
 // pose is kept relative to a keyframe in the units of the map there when it was tracked
 // (KeyFrame::scale_correction); a BA that undid part of a merge's stretch along a young map left its frames
-// 3-4 % long between keyframes, a sawtooth 0.3 m behind over its first 40 frames.
+// 3-4 % long between keyframes, its first 20 frames 0.3 m behind.
 std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
                                                         int min_points = 20);
 
