@@ -250,6 +250,56 @@ TEST_F(StretchedStreet, WithoutFollowingTheKeyFramesKeepTheirUnits) {
   EXPECT_NEAR(keyframes_[3]->center().z(), kStretch * Center(3).z(), 1e-9) << "the poses were written";
 }
 
+// Keyframes 3-7 and all points stretched by kStretch about the origin, keyframe 5 then moved 6 cm on along
+// the street and keyframe 7 half a metre on (a keyframe the BA put elsewhere, as at a merge's seam).
+class UnevenlyStretchedStreet : public StretchedStreet {
+ protected:
+  GlobalBundleAdjustmentResult Stretched() const {
+    GlobalBundleAdjustmentResult result;
+    for (int k = 3; k <= 7; ++k) {
+      const double on = k == 5 ? 0.06 : k == 7 ? 0.5 : 0.0;
+      result.camera_from_world[keyframes_[k]] =
+          Rigid3d(Eigen::Quaterniond::Identity(), -(kStretch * Center(k) + Eigen::Vector3d(0, 0, on)));
+    }
+    for (MapPoint* p : points_) {
+      if (p != nullptr) result.positions[p] = kStretch * p->position();
+    }
+    return result;
+  }
+};
+
+TEST_F(UnevenlyStretchedStreet, KeyFramesFollowTheStepToTheNext) {
+  const std::unordered_map<KeyFrame*, double> changes = LocalScaleChanges(Stretched());
+  ASSERT_EQ(changes.size(), 5u);
+  EXPECT_NEAR(changes.at(keyframes_[3]), kStretch, 1e-9);
+  EXPECT_NEAR(changes.at(keyframes_[4]), (2 * kStretch + 0.06) / 2, 1e-9);
+  EXPECT_NEAR(changes.at(keyframes_[5]), (2 * kStretch - 0.06) / 2, 1e-9);
+  // The step to keyframe 7 (1.30) is not a stretch the points show: keyframe 6 takes the step before it.
+  EXPECT_NEAR(changes.at(keyframes_[6]), (2 * kStretch - 0.06) / 2, 1e-9);
+  // The last has only that step: its points' depth ratio (a little under kStretch: it moved on).
+  EXPECT_GT(changes.at(keyframes_[7]), 0.95);
+  EXPECT_LT(changes.at(keyframes_[7]), kStretch);
+}
+
+TEST_F(UnevenlyStretchedStreet, WithoutStepsTheKeyFramesFollowTheirPointsDepths) {
+  LocalScaleOptions options;
+  options.min_spacing_of_depth = 10.0;  // every step too short
+  const std::unordered_map<KeyFrame*, double> changes = LocalScaleChanges(Stretched(), options);
+  EXPECT_NEAR(changes.at(keyframes_[3]), kStretch, 1e-9);
+  EXPECT_NEAR(changes.at(keyframes_[4]), kStretch, 1e-9);
+  EXPECT_LT(changes.at(keyframes_[5]), kStretch);
+}
+
+TEST(LocalScaleOptions, RejectsNonsense) {
+  LocalScaleOptions options;
+  EXPECT_NO_THROW(options.Check());
+  options.max_spacing_disagreement = 0.9;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  options = {};
+  options.min_points = 0;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
 // Every tenth point is matched wrongly in every fourth keyframe: one observation in seven of those points, as a
 // look-alike facade gives.
 class StreetWithWrongMatches : public DisturbedStreet {

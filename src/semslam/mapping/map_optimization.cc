@@ -97,6 +97,14 @@ void GlobalBundleAdjustmentOptions::Check() const {
   Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
 }
 
+void LocalScaleOptions::Check() const {
+  Require(min_points >= 1, "local scale: min_points must be >= 1");
+  Require(std::isfinite(min_spacing_of_depth) && min_spacing_of_depth >= 0,
+          "local scale: min_spacing_of_depth must be >= 0");
+  Require(std::isfinite(max_spacing_disagreement) && max_spacing_disagreement >= 1,
+          "local scale: max_spacing_disagreement must be >= 1");
+}
+
 std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes) {
   Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
   const size_t window = static_cast<size_t>(window_keyframes);
@@ -211,25 +219,70 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
   return result;
 }
 
+namespace {
+
+// The median of the keyframe's points' depth after over depth before, and their median depth before; nullopt
+// with fewer than `min_points` such points.
+std::optional<std::pair<double, double>> DepthRatio(const KeyFrame& kf, const Rigid3d& camera_from_world,
+                                                    const GlobalBundleAdjustmentResult& result,
+                                                    int min_points) {
+  std::vector<double> ratios, depths;
+  for (MapPoint* p : kf.map_points()) {
+    if (p == nullptr || p->is_bad()) continue;
+    const auto moved = result.positions.find(p);
+    if (moved == result.positions.end()) continue;
+    const double before = (kf.camera_from_world() * p->position()).z();
+    const double after = (camera_from_world * moved->second).z();
+    if (before > 0.0 && after > 0.0 && std::isfinite(after / before)) {
+      ratios.push_back(after / before);
+      depths.push_back(before);
+    }
+  }
+  if (ratios.size() < static_cast<size_t>(min_points)) return std::nullopt;
+  const auto median = [](std::vector<double>& v) {
+    const auto middle = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), middle, v.end());
+    return *middle;
+  };
+  return std::make_pair(median(ratios), median(depths));
+}
+
+}  // namespace
+
 std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
-                                                        int min_points) {
-  std::unordered_map<KeyFrame*, double> changes;
-  std::vector<double> ratios;
+                                                        const LocalScaleOptions& options) {
+  options.Check();
+  struct Moved {
+    KeyFrame* kf;
+    Eigen::Vector3d center_after;
+    double depth_ratio;
+    double median_depth;
+  };
+  std::vector<Moved> moved;  // with enough moved points, along the drive
   for (const auto& [kf, camera_from_world] : result.camera_from_world) {
     if (kf->is_bad()) continue;
-    ratios.clear();
-    for (MapPoint* p : kf->map_points()) {
-      if (p == nullptr || p->is_bad()) continue;
-      const auto moved = result.positions.find(p);
-      if (moved == result.positions.end()) continue;
-      const double before = (kf->camera_from_world() * p->position()).z();
-      const double after = (camera_from_world * moved->second).z();
-      if (before > 0.0 && after > 0.0 && std::isfinite(after / before)) ratios.push_back(after / before);
-    }
-    if (ratios.size() < static_cast<size_t>(std::max(1, min_points))) continue;
-    const auto middle = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
-    std::nth_element(ratios.begin(), middle, ratios.end());
-    changes[kf] = *middle;
+    const auto depth = DepthRatio(*kf, camera_from_world, result, options.min_points);
+    if (depth) moved.push_back({kf, camera_from_world.Inverse().translation, depth->first, depth->second});
+  }
+  std::sort(moved.begin(), moved.end(),
+            [](const Moved& a, const Moved& b) { return a.kf->id() < b.kf->id(); });
+  std::unordered_map<KeyFrame*, double> changes;
+  for (size_t i = 0; i < moved.size(); ++i) {
+    const Moved& m = moved[i];
+    // The step to the next keyframe is what the frames tracked from this one span; the last one has the step
+    // before it.
+    const auto spacing_ratio = [&](const Moved& other) -> std::optional<double> {
+      const double before = (other.kf->center() - m.kf->center()).norm();
+      if (before <= options.min_spacing_of_depth * m.median_depth) return std::nullopt;
+      const double ratio = (other.center_after - m.center_after).norm() / before;
+      if (!(std::abs(std::log(ratio / m.depth_ratio)) <= std::log(options.max_spacing_disagreement)))
+        return std::nullopt;
+      return ratio;
+    };
+    std::optional<double> change;
+    if (i + 1 < moved.size()) change = spacing_ratio(moved[i + 1]);
+    if (!change && i > 0) change = spacing_ratio(moved[i - 1]);
+    changes[m.kf] = change.value_or(m.depth_ratio);
   }
   return changes;
 }

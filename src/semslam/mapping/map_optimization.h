@@ -83,14 +83,32 @@ std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_
 GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
                                                 const GlobalBundleAdjustmentOptions& options, bool lock_map);
 
-// How much a monocular BA stretches the map around each keyframe it moves: the median, over the keyframe's
-// points the BA also moved, of their depth after over their depth before ("before" is the map as it is: call
-// it before writing the result). Keyframes with fewer than `min_points` such points are left out. A frame's
-// pose is kept relative to a keyframe in the units of the map there when it was tracked
-// (KeyFrame::scale_correction); a BA that undid part of a merge's stretch along a young map left its frames
-// 3-4 % long between keyframes, its first 20 frames 0.3 m behind.
+// How LocalScaleChanges tells the stretch around a keyframe.
+struct LocalScaleOptions {
+  // Keyframes with fewer points the BA also moved are left out.
+  int min_points = 20;
+  // A step between keyframes shorter than this fraction of the keyframe's median depth is too short to tell
+  // the stretch (a car at a stop).
+  double min_spacing_of_depth = 0.02;
+  // A step's stretch further than this factor from the points' depth ratio is not a stretch but a keyframe
+  // the BA moved (at a merge's seam, after a loop).
+  double max_spacing_disagreement = 1.15;
+
+  void Check() const;  // throws InvalidArgument
+};
+
+// How much a monocular BA stretches the map around each keyframe it moves ("before" is the map as it is: call
+// it before writing the result). A frame's pose is kept relative to a keyframe in the units of the map there
+// when it was tracked (KeyFrame::scale_correction); a BA that undid part of a merge's stretch along a young
+// map left its frames 3-4 % long between keyframes, its first 20 frames 0.3 m behind.
+//
+// The stretch is that of the step to the next keyframe along the drive (the step before it for the last),
+// which is what the frames tracked from the keyframe span. Where that step is too short or disagrees with the
+// points, it is the median, over the keyframe's points the BA also moved, of their depth after over their
+// depth before. The depth ratio alone left a sawtooth in some runs (frames 1-3 % long, then short, with the
+// keyframes' period): the points' depths do not stretch exactly as the steps between keyframes do.
 std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
-                                                        int min_points = 20);
+                                                        const LocalScaleOptions& options = {});
 
 // KeyFrame::CorrectScale by each change. Write lock.
 void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes);
