@@ -290,6 +290,32 @@ TEST_F(UnevenlyStretchedStreet, WithoutStepsTheKeyFramesFollowTheirPointsDepths)
   EXPECT_LT(changes.at(keyframes_[5]), kStretch);
 }
 
+// A solved problem (as the local BA's): keyframes 3-8 free, 0-2 fixed, the free poses and every point
+// stretched.
+TEST_F(StretchedStreet, ASolvedProblemTellsTheStretchOfItsFreeKeyFrames) {
+  std::vector<KeyFrame*> free(keyframes_.begin() + 3, keyframes_.begin() + 9);
+  std::vector<KeyFrame*> fixed(keyframes_.begin(), keyframes_.begin() + 3);
+  std::vector<MapPoint*> points;
+  for (MapPoint* p : points_) {
+    if (p != nullptr) points.push_back(p);
+  }
+  BundleAdjustmentProblem problem;
+  std::vector<ObservationRef> refs;
+  {
+    auto lock = map_.ReadLock();
+    BuildBundleAdjustmentProblem(free, fixed, points, &problem, &refs);
+  }
+  for (size_t i = 0; i < free.size(); ++i)
+    problem.camera_from_world[i] = Rigid3d(Eigen::Quaterniond::Identity(), -kStretch * free[i]->center());
+  for (Eigen::Vector3d& x : problem.points) x *= kStretch;
+  std::vector<KeyFrame*> all = free;
+  all.insert(all.end(), fixed.begin(), fixed.end());
+  const std::unordered_map<KeyFrame*, double> changes = LocalScaleChanges(problem, all, points);
+  ASSERT_EQ(changes.size(), free.size()) << "the fixed keyframes did not move";
+  for (KeyFrame* kf : free) EXPECT_NEAR(changes.at(kf), kStretch, 1e-9);
+  EXPECT_THROW(LocalScaleChanges(problem, free, points), InvalidArgument) << "not the problem's keyframes";
+}
+
 TEST(LocalScaleOptions, RejectsNonsense) {
   LocalScaleOptions options;
   EXPECT_NO_THROW(options.Check());

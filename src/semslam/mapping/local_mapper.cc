@@ -470,6 +470,11 @@ void LocalMapper::LocalBundleAdjustment() {
   options.refine_without_outliers = true;
   const BundleAdjustmentResult result = BundleAdjust(problem, options);
   auto lock = map_.WriteLock();
+  if (options_.monocular) {
+    // The frames kept relative to these keyframes stretch with the map around them: a young map's local BAs
+    // settle its scale over its first seconds (LocalScaleChanges).
+    FollowLocalScaleChanges(LocalScaleChanges(problem, all, points));
+  }
   ApplyBundleAdjustment(map_, problem, result, all, points, refs, /*drop_outliers=*/true);
 }
 

@@ -287,6 +287,20 @@ std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjust
   return changes;
 }
 
+std::unordered_map<KeyFrame*, double> LocalScaleChanges(const BundleAdjustmentProblem& solved,
+                                                        const std::vector<KeyFrame*>& keyframes,
+                                                        const std::vector<MapPoint*>& points,
+                                                        const LocalScaleOptions& options) {
+  Require(keyframes.size() == solved.camera_from_world.size() && points.size() == solved.points.size(),
+          "local scale: the keyframes and points must be those of the problem");
+  GlobalBundleAdjustmentResult moved;
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    if (!solved.pose_fixed[i]) moved.camera_from_world[keyframes[i]] = solved.camera_from_world[i];
+  }
+  for (size_t j = 0; j < points.size(); ++j) moved.positions[points[j]] = solved.points[j];
+  return LocalScaleChanges(moved, options);
+}
+
 void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes) {
   for (const auto& [kf, change] : changes) kf->CorrectScale(change);
 }
@@ -345,14 +359,12 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
   // The keyframes follow the stretch of each solution the map takes (the problem holds it after the solve).
-  const auto follow_local_scale = [&](const BundleAdjustmentResult& solved) {
+  const auto follow_local_scale = [&] {
     if (!options.follow_local_scale) return;
-    GlobalBundleAdjustmentResult moved;
-    KeepWindow(whole, solved, /*drop_outliers=*/false, &moved);
-    FollowLocalScaleChanges(LocalScaleChanges(moved));
+    FollowLocalScaleChanges(LocalScaleChanges(problem, whole.keyframes, whole.points));
   };
   const BundleAdjustmentResult plain = BundleAdjust(problem, solver);
-  follow_local_scale(plain);
+  follow_local_scale();
   ApplyBundleAdjustment(map, problem, plain, whole.keyframes, whole.points, whole.refs,
                         options.drop_outliers);
   refinement.plain_cost = plain.final_capped_chi2;
@@ -378,7 +390,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
       refinement.reason = "the radial distortion came out above 0.2";
     } else {
       refinement.accepted = true;
-      follow_local_scale(result);
+      follow_local_scale();
       ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, {}, false);
     }
   }

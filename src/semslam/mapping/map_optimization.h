@@ -110,6 +110,13 @@ struct LocalScaleOptions {
 std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
                                                         const LocalScaleOptions& options = {});
 
+// The same for a solved problem of BuildBundleAdjustmentProblem (which holds the solution after the solve),
+// over its `keyframes` (poses in the problem's order, fixed ones included) and `points`.
+std::unordered_map<KeyFrame*, double> LocalScaleChanges(const BundleAdjustmentProblem& solved,
+                                                        const std::vector<KeyFrame*>& keyframes,
+                                                        const std::vector<MapPoint*>& points,
+                                                        const LocalScaleOptions& options = {});
+
 // KeyFrame::CorrectScale by each change. Write lock.
 void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes);
 
