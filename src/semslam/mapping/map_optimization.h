@@ -105,9 +105,9 @@ struct LocalScaleOptions {
 // The stretch is that of the step to the next keyframe along the drive (the step before it for the last),
 // which is what the frames tracked from the keyframe span. Where that step is too short or disagrees with the
 // points, it is the median, over the keyframe's points the BA also moved, of their depth after over their
-// depth before. The depth ratio alone left a sawtooth after some merges (the spread of the frame-step ratios over
-// a young map's first 30 frames 0.058 in one run, 0.011-0.015 with the steps'): the points' depths do not
-// stretch exactly as the steps between keyframes do.
+// depth before. The depth ratio alone left a sawtooth after some merges (the spread of the frame-step ratios
+// over a young map's first 30 frames 0.058 in one run, 0.011-0.015 with the steps'): the points' depths do
+// not stretch exactly as the steps between keyframes do.
 std::unordered_map<KeyFrame*, double> LocalScaleChanges(const GlobalBundleAdjustmentResult& result,
                                                         const LocalScaleOptions& options = {});
 
