@@ -173,17 +173,22 @@ BundleAdjustmentOptions SolverOptions(const GlobalBundleAdjustmentOptions& optio
   return solver;
 }
 
+// The free poses and the points a solved problem holds, by keyframe and point (the problem's order).
+void KeepSolution(const BundleAdjustmentProblem& solved, const std::vector<KeyFrame*>& keyframes,
+                  const std::vector<MapPoint*>& points, GlobalBundleAdjustmentResult* result) {
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    if (!solved.pose_fixed[i]) result->camera_from_world[keyframes[i]] = solved.camera_from_world[i];
+  }
+  for (size_t j = 0; j < points.size(); ++j) result->positions[points[j]] = solved.points[j];
+}
+
 void KeepWindow(const WindowProblem& window, const BundleAdjustmentResult& solved, bool drop_outliers,
                 GlobalBundleAdjustmentResult* result) {
   if (drop_outliers) {
     const std::vector<ObservationRef> outliers = Outliers(solved, window.refs);
     result->outliers.insert(result->outliers.end(), outliers.begin(), outliers.end());
   }
-  for (size_t i = 0; i < window.keyframes.size(); ++i) {
-    if (!window.problem.pose_fixed[i])
-      result->camera_from_world[window.keyframes[i]] = window.problem.camera_from_world[i];
-  }
-  for (size_t j = 0; j < window.points.size(); ++j) result->positions[window.points[j]] = window.problem.points[j];
+  KeepSolution(window.problem, window.keyframes, window.points, result);
 }
 
 }  // namespace
@@ -294,10 +299,7 @@ std::unordered_map<KeyFrame*, double> LocalScaleChanges(const BundleAdjustmentPr
   Require(keyframes.size() == solved.camera_from_world.size() && points.size() == solved.points.size(),
           "local scale: the keyframes and points must be those of the problem");
   GlobalBundleAdjustmentResult moved;
-  for (size_t i = 0; i < keyframes.size(); ++i) {
-    if (!solved.pose_fixed[i]) moved.camera_from_world[keyframes[i]] = solved.camera_from_world[i];
-  }
-  for (size_t j = 0; j < points.size(); ++j) moved.positions[points[j]] = solved.points[j];
+  KeepSolution(solved, keyframes, points, &moved);
   return LocalScaleChanges(moved, options);
 }
 
