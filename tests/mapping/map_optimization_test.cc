@@ -250,6 +250,39 @@ TEST_F(StretchedStreet, WithoutFollowingTheKeyFramesKeepTheirUnits) {
   EXPECT_NEAR(keyframes_[3]->center().z(), kStretch * Center(3).z(), 1e-9) << "the poses were written";
 }
 
+// A keyframe made while the BA ran (11, a child of 10), with a point of its own: both follow keyframe 10, and
+// stretch with it when the keyframes follow the local scale.
+class StretchedStreetWithANewKeyFrame : public StretchedStreet {
+ protected:
+  void SetUp() override {
+    StretchedStreet::SetUp();
+    auto lock = map_.WriteLock();
+    keyframes_[11]->ChangeParent(keyframes_[10]);
+    new_point_ = map_.AddMapPoint(Center(11) + Eigen::Vector3d(1.0, 0.5, 6.0), keyframes_[11]);
+  }
+  MapPoint* new_point_ = nullptr;
+};
+
+TEST_F(StretchedStreetWithANewKeyFrame, ItFollowsItsAncestorStretched) {
+  const Eigen::Vector3d point_before = new_point_->position();
+  auto lock = map_.WriteLock();
+  EXPECT_EQ(WriteGlobalBundleAdjustment(map_, Stretched(), /*follow_local_scale=*/true), 1);
+  EXPECT_NEAR(keyframes_[11]->scale_correction(), kStretch, 1e-9);
+  EXPECT_LT((keyframes_[11]->center() - kStretch * Center(11)).norm(), 1e-9);
+  EXPECT_LT((new_point_->position() - kStretch * point_before).norm(), 1e-9);
+  EXPECT_EQ(keyframes_[12]->scale_correction(), 1.0) << "no ancestor in the result";
+}
+
+TEST_F(StretchedStreetWithANewKeyFrame, WithoutFollowingTheScaleItFollowsRigidly) {
+  const Eigen::Vector3d point_before = new_point_->position();
+  auto lock = map_.WriteLock();
+  EXPECT_EQ(WriteGlobalBundleAdjustment(map_, Stretched()), 1);
+  EXPECT_EQ(keyframes_[11]->scale_correction(), 1.0);
+  const Eigen::Vector3d shift = (kStretch - 1.0) * Center(10);  // keyframe 10's move
+  EXPECT_LT((keyframes_[11]->center() - (Center(11) + shift)).norm(), 1e-9);
+  EXPECT_LT((new_point_->position() - (point_before + shift)).norm(), 1e-9);
+}
+
 // Keyframes 3-7 and all points stretched by kStretch about the origin, keyframe 5 then moved 6 cm on along
 // the street and keyframe 7 half a metre on (a keyframe the BA put elsewhere, as at a merge's seam).
 class UnevenlyStretchedStreet : public StretchedStreet {

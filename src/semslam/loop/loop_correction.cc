@@ -290,44 +290,11 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   {
     auto lock = map_.WriteLock();
     // Monocular: the frames kept relative to a keyframe stretch with the map around it.
-    if (!options_.fix_scale) FollowLocalScaleChanges(LocalScaleChanges(adjusted));
-    DropObservations(map_, adjusted.outliers);
-    // Corrections before -> after per keyframe, propagated down the spanning tree.
-    std::unordered_map<KeyFrame*, std::pair<Rigid3d, Rigid3d>> correction;  // (before cw, after cw)
-    for (const auto& [kf, camera_from_world] : adjusted.camera_from_world) {
-      if (!kf->is_bad()) correction[kf] = {kf->camera_from_world(), camera_from_world};
-    }
-    for (KeyFrame* kf : map_.KeyFramesOfMap(map_id)) {
-      if (kf->is_bad() || correction.count(kf)) continue;
-      // Walk up to an ancestor that has a correction.
-      std::vector<KeyFrame*> chain = {kf};
-      KeyFrame* a = kf->parent();
-      while (a != nullptr && !correction.count(a)) {
-        chain.push_back(a);
-        a = a->parent();
-      }
-      if (a == nullptr) continue;
-      for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
-        KeyFrame* child = *it;
-        KeyFrame* parent = child->parent();
-        const auto& [parent_before, parent_after] = correction[parent];
-        const Rigid3d child_from_parent = child->camera_from_world() * parent_before.Inverse();
-        correction[child] = {child->camera_from_world(), child_from_parent * parent_after};
-      }
-    }
-    for (const auto& [kf, c] : correction) kf->SetPose(c.second);
-    for (MapPoint* p : map_.MapPointsOfMap(map_id)) {
-      if (p->is_bad()) continue;
-      const auto it = adjusted.positions.find(p);
-      if (it != adjusted.positions.end()) {
-        p->SetPosition(it->second);
-      } else if (p->reference_keyframe() != nullptr) {
-        const auto c = correction.find(p->reference_keyframe());
-        if (c != correction.end())
-          p->SetPosition(c->second.second.Inverse() * (c->second.first * p->position()));
-      }
-      p->UpdateNormalAndDepth();
-    }
+    const int followers =
+        WriteGlobalBundleAdjustment(map_, adjusted, /*follow_local_scale=*/!options_.fix_scale);
+    if (followers > 0)
+      spdlog::info("{} keyframe{} made during the global BA followed {} ancestors", followers,
+                   followers == 1 ? "" : "s", followers == 1 ? "its" : "their");
     map_.NotifyBigChange();
   }
   mapper_.Release();

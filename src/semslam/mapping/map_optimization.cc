@@ -197,6 +197,7 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
                                                 const GlobalBundleAdjustmentOptions& options, bool lock_map) {
   options.Check();
   GlobalBundleAdjustmentResult result;
+  result.map_id = map_id;
   std::vector<KeyFrame*> keyframes;
   {
     std::shared_lock<std::shared_mutex> lock;
@@ -307,18 +308,60 @@ void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& change
   for (const auto& [kf, change] : changes) kf->CorrectScale(change);
 }
 
-void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
-                                 bool follow_local_scale) {
-  if (follow_local_scale) FollowLocalScaleChanges(LocalScaleChanges(result));
+int WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
+                                bool follow_local_scale) {
+  std::unordered_map<KeyFrame*, double> stretch;
+  if (follow_local_scale) stretch = LocalScaleChanges(result);
+  FollowLocalScaleChanges(stretch);
   DropObservations(map, result.outliers);
+  struct Correction {
+    Rigid3d before_cw, after_cw;
+    double stretch = 1.0;
+  };
+  std::unordered_map<KeyFrame*, Correction> correction;
   for (const auto& [kf, camera_from_world] : result.camera_from_world) {
-    if (!kf->is_bad()) kf->SetPose(camera_from_world);
+    if (kf->is_bad()) continue;
+    const auto s = stretch.find(kf);
+    correction[kf] = {kf->camera_from_world(), camera_from_world, s != stretch.end() ? s->second : 1.0};
   }
-  for (const auto& [p, position] : result.positions) {
+  // Keyframes made since: each follows its nearest ancestor in the result, stretched with it.
+  int followers = 0;
+  for (KeyFrame* kf : map.KeyFramesOfMap(result.map_id)) {
+    if (kf->is_bad() || correction.count(kf)) continue;
+    std::vector<KeyFrame*> chain = {kf};
+    KeyFrame* a = kf->parent();
+    while (a != nullptr && !correction.count(a)) {
+      chain.push_back(a);
+      a = a->parent();
+    }
+    if (a == nullptr) continue;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      KeyFrame* child = *it;
+      const Correction& parent = correction.at(child->parent());
+      const Rigid3d child_from_parent = child->camera_from_world() * parent.before_cw.Inverse();
+      correction[child] = {child->camera_from_world(),
+                           Stretched(child_from_parent, parent.stretch) * parent.after_cw, parent.stretch};
+      child->CorrectScale(parent.stretch);
+      ++followers;
+    }
+  }
+  for (const auto& [kf, c] : correction) kf->SetPose(c.after_cw);
+  // Points the result holds take their place; the others (made since, or left out) follow their reference.
+  for (MapPoint* p : map.MapPointsOfMap(result.map_id)) {
     if (p->is_bad()) continue;
-    p->SetPosition(position);
+    const auto it = result.positions.find(p);
+    if (it != result.positions.end()) {
+      p->SetPosition(it->second);
+    } else {
+      const auto c =
+          p->reference_keyframe() != nullptr ? correction.find(p->reference_keyframe()) : correction.end();
+      if (c == correction.end()) continue;
+      p->SetPosition(c->second.after_cw.Inverse() *
+                     (c->second.stretch * (c->second.before_cw * p->position())));
+    }
     p->UpdateNormalAndDepth();
   }
+  return followers;
 }
 
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options) {

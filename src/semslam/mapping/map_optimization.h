@@ -66,6 +66,7 @@ struct GlobalBundleAdjustmentOptions {
 // What a global BA found, not yet written into the map: the keyframes it moved, the points, and the observations
 // that failed the chi-square test (GlobalBundleAdjustmentOptions::drop_outliers).
 struct GlobalBundleAdjustmentResult {
+  std::uint32_t map_id = 0;
   std::unordered_map<KeyFrame*, Rigid3d> camera_from_world;
   std::unordered_map<MapPoint*, Eigen::Vector3d> positions;
   std::vector<ObservationRef> outliers;
@@ -121,10 +122,14 @@ std::unordered_map<KeyFrame*, double> LocalScaleChanges(const BundleAdjustmentPr
 // KeyFrame::CorrectScale by each change. Write lock.
 void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& changes);
 
-// Writes the result into the map (skipping what turned bad), drops its outlier observations and updates the
-// points' normals; with `follow_local_scale`, the keyframes follow LocalScaleChanges first. Write lock.
-void WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
-                                 bool follow_local_scale = false);
+// Writes the result into its map as the map is now (skipping what turned bad), drops its outlier observations
+// and updates the points' normals. Keyframes made since the BA read the map follow their nearest ancestor in
+// the result down the spanning tree; points the result does not hold follow their reference keyframe. With
+// `follow_local_scale` (monocular), the keyframes follow LocalScaleChanges first, and those made since
+// stretch with their ancestor: moved rigidly, the newest part of a map kept its old units beside a stretched
+// neighbourhood. Returns how many keyframes followed an ancestor. Write lock.
+int WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
+                                bool follow_local_scale = false);
 
 // Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options);
