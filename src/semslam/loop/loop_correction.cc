@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "semslam/core/error.h"
+#include "semslam/core/thread_priority.h"
 #include "semslam/loop/loop_closer.h"
 #include "semslam/map/map_matcher.h"
 #include "semslam/mapping/local_mapper.h"
@@ -24,6 +25,9 @@ namespace {
 // A gap link's prediction is rough (the motion of before a loss carried over it): its information is this
 // share of a covisibility edge's.
 constexpr double kGapLinkWeight = 0.1;
+
+// How much lower than the pipeline's other threads the global BA runs.
+constexpr int kGlobalBundleAdjustmentNiceness = 10;
 
 }  // namespace
 
@@ -271,6 +275,9 @@ void LoopCloser::StopGlobalBundleAdjustment() {
 }
 
 void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
+  // It may take many seconds; on a machine with fewer cores than the pipeline has threads it would otherwise
+  // slow the local mapper while the drive goes on into places no loop will correct.
+  LowerCurrentThreadPriority(kGlobalBundleAdjustmentNiceness);
   ScopedTimer timer(timing_, "global_ba");
   spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
   GlobalBundleAdjustmentOptions options;
