@@ -11,36 +11,39 @@
 namespace semslam {
 namespace {
 
-TEST(ThreadPriority, LoweringItInOneThreadLeavesTheOthers) {
-  const int caller_before = CurrentThreadNiceValue();
-  int worker_before = 0, worker_after = 0;
+struct Lowering {
+  int before = 0, after = 0;
   bool lowered = false;
+};
+
+// Lowers a fresh worker thread's priority by `steps`: its nice value before and after.
+Lowering LowerInAWorker(int steps) {
+  Lowering lowering;
   std::thread worker([&] {
-    worker_before = CurrentThreadNiceValue();
-    lowered = LowerCurrentThreadPriority(5);
-    worker_after = CurrentThreadNiceValue();
+    lowering.before = CurrentThreadNiceValue();
+    lowering.lowered = LowerCurrentThreadPriority(steps);
+    lowering.after = CurrentThreadNiceValue();
   });
   worker.join();
+  return lowering;
+}
+
+TEST(ThreadPriority, LoweringItInOneThreadLeavesTheOthers) {
+  const int caller_before = CurrentThreadNiceValue();
+  const Lowering worker = LowerInAWorker(5);
 #if defined(__linux__)
-  ASSERT_TRUE(lowered) << "raising a nice value needs no privilege";
-  EXPECT_EQ(worker_after, std::min(19, worker_before + 5));
+  ASSERT_TRUE(worker.lowered) << "raising a nice value needs no privilege";
+  EXPECT_EQ(worker.after, std::min(19, worker.before + 5));
 #else
-  EXPECT_FALSE(lowered);
+  EXPECT_FALSE(worker.lowered);
 #endif
   EXPECT_EQ(CurrentThreadNiceValue(), caller_before);
 }
 
 TEST(ThreadPriority, NoStepsChangesNothing) {
-  int before = 0, after = 0;
-  bool lowered = false;
-  std::thread worker([&] {
-    before = CurrentThreadNiceValue();
-    lowered = LowerCurrentThreadPriority(0);
-    after = CurrentThreadNiceValue();
-  });
-  worker.join();
-  EXPECT_TRUE(lowered);
-  EXPECT_EQ(after, before);
+  const Lowering worker = LowerInAWorker(0);
+  EXPECT_TRUE(worker.lowered);
+  EXPECT_EQ(worker.after, worker.before);
 }
 
 }  // namespace

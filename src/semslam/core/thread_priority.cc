@@ -27,10 +27,11 @@ int CurrentThreadNiceValue() {
 
 bool LowerCurrentThreadPriority(int steps) {
   if (steps <= 0) return steps == 0;
+  const id_t thread = CurrentThreadId();
   errno = 0;
-  const int nice = getpriority(PRIO_PROCESS, CurrentThreadId());
+  const int nice = getpriority(PRIO_PROCESS, thread);
   if (errno != 0) return false;
-  return setpriority(PRIO_PROCESS, CurrentThreadId(), std::min(19, nice + steps)) == 0;
+  return setpriority(PRIO_PROCESS, thread, std::min(19, nice + steps)) == 0;
 }
 #else
 int CurrentThreadNiceValue() { return 0; }
