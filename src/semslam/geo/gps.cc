@@ -341,6 +341,7 @@ GpsLog ReadGpsNmea(const fs::path& file, const GpsReadOptions& options) {
 }
 
 void LogSkippedFixes(const GpsLog& log, size_t max_lines) {
+  for (const std::string& note : log.notes) spdlog::info("GPS {}: {}", log.source.string(), note);
   for (size_t i = 0; i < log.skipped.size() && i < max_lines; ++i) {
     spdlog::warn("GPS fix skipped: {}: {}", log.skipped[i].where.ToString(), log.skipped[i].reason);
   }

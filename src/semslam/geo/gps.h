@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "semslam/core/error.h"
@@ -37,7 +38,11 @@ struct GpsLog {
   std::vector<GpsFix> fixes;  // accepted fixes, strictly increasing in time
   std::vector<SkippedFix> skipped;
   std::filesystem::path source;
-  std::string format;  // "oxts", "csv" or "nmea"
+  std::string format;  // "oxts", "csv", "nmea" or "kml"
+  // The log gives no times, one position per frame instead: each fix's timestamp is its frame number in the
+  // sequence until TimeFixesByFrame gives it that frame's time.
+  bool times_are_frames = false;
+  std::vector<std::string> notes;  // what a reader or TimeFixesByFrame left out as a whole, for the log
 };
 
 struct GpsReadOptions {
@@ -72,8 +77,17 @@ GpsLog ReadGpsCsv(const std::filesystem::path& file, const GpsReadOptions& optio
 // NMEA 0183: GGA sentences (any talker) are fixes; RMC sentences only give the date. Other sentences are
 // ignored. Altitude = MSL altitude + geoid separation (ellipsoidal height) when the separation is given.
 GpsLog ReadGpsNmea(const std::filesystem::path& file, const GpsReadOptions& options = {});
-// Any of the above: a directory is an oxts folder; a file whose first non-blank character is '$' is NMEA;
-// anything else is CSV.
+// KML: the positions of a gx:Track (<when> with <gx:coord>) or of Placemarks with a <TimeStamp>, in Unix
+// time; a document without times (a LineString's <coordinates>) gives one position per frame of the sequence,
+// the k-th for frame k (times_are_frames). Sigma: default_sigma_m.
+GpsLog ReadGpsKml(const std::filesystem::path& file, const GpsReadOptions& options = {});
+// Gives the fixes of a log read with times_are_frames the times of their frames (`frame_times[k]`: frame k of
+// the sequence); positions beyond the sequence are dropped (and noted). Nothing for a timed log.
+void TimeFixesByFrame(GpsLog& log, const std::vector<double>& frame_times);
+// "YYYY-MM-DDThh:mm:ss[.s][Z|+hh:mm|-hh:mm]" -> Unix seconds (UTC without a zone); nullopt when malformed.
+std::optional<double> ParseIso8601Utc(std::string_view text);
+// Any of the above: a directory is an oxts folder; a .kml file is KML; a file whose first non-blank character
+// is '$' is NMEA; anything else is CSV.
 GpsLog ReadGps(const std::filesystem::path& path, const GpsReadOptions& options = {});
 
 // Logs the skipped fixes (the first `max_lines` of them, then a count) as warnings.

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <fstream>
 
 #include "semslam/geo/gps.h"
@@ -49,6 +50,9 @@ GpsLog ReadGpsOxts(const fs::path& path, const GpsReadOptions& options) {
 
 GpsLog ReadGps(const fs::path& path, const GpsReadOptions& options) {
   if (fs::is_directory(path)) return ReadGpsOxts(path, options);
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".kml") return ReadGpsKml(path, options);
   std::ifstream stream(path);
   if (!stream) throw InputError(path, "cannot open the GPS file");
   char c = 0;

@@ -220,6 +220,7 @@ RunSummary RunSequence(const RunOptions& options) {
   std::optional<GpsLog> gps_log;
   if (!options.gps.empty()) {
     gps_log = ReadGps(options.gps);
+    TimeFixesByFrame(*gps_log, FrameTimestamps(*sequence, 0, sequence->size()));
     LogSkippedFixes(*gps_log);
     CheckGpsLog(*gps_log, frame_times);
   }
