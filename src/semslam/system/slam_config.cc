@@ -58,6 +58,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"keyframe_tracked_ratio_stereo", Bind(&o->tracker.keyframe_tracked_ratio_stereo)},
       {"keyframe_collapse_ratio_mono", Bind(&o->tracker.keyframe_collapse_ratio_mono)},
       {"keyframe_collapse_ratio_stereo", Bind(&o->tracker.keyframe_collapse_ratio_stereo)},
+      {"keyframe_weak_inliers_mono", Bind(&o->tracker.keyframe_weak_inliers_mono)},
       {"motion_model_min_kept_ratio", Bind(&o->tracker.motion_model_min_kept_ratio)},
       {"close_depth_baselines", Bind(&o->tracker.close_depth_baselines)},
       {"init_min_matches", Bind(&o->tracker.init_min_matches)},

@@ -37,6 +37,7 @@ void TrackerOptions::Check() const {
               keyframe_collapse_ratio_stereo >= 0 &&
               keyframe_collapse_ratio_stereo <= keyframe_tracked_ratio_stereo,
           "tracker: keyframe_collapse_ratio_mono/stereo must be in [0, keyframe_tracked_ratio]");
+  Require(keyframe_weak_inliers_mono >= 0, "tracker: keyframe_weak_inliers_mono must be >= 0");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
   Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
           "tracker: init_min_parallax_deg must be >= 0, init_parallax_rank >= 1, init_min_points >= 8");
@@ -290,8 +291,8 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
     // gap goes on).
     const bool just_relocalized =
         frame.id() < last_relocalization_frame_ + 2 && !last_relocalization_recovered_;
-    // After a loop correction or a merge the motion model still holds (the last frame moved with its keyframe),
-    // and is checked against the reference keyframe when it keeps few points.
+    // After a loop correction or a merge the motion model still holds (the last frame moved with its
+    // keyframe), and is checked against the reference keyframe when it keeps few points.
     if (!velocity_ || just_relocalized) {
       ok = TrackReferenceKeyFrame(frame) > 0;
     } else {
@@ -574,8 +575,10 @@ void Tracker::SearchLocalMapPoints(Frame& frame) {
 
 bool Tracker::TrackLocalMap(Frame& frame) {
   ScopedTimer timer(timing_, "track_local_map");
+  const int before_local = frame.CountMatches();
   UpdateLocalMap(frame);
   SearchLocalMapPoints(frame);
+  const int after_local = frame.CountMatches();
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   OptimizeFramePose(frame);
   inliers_ = 0;
@@ -591,6 +594,15 @@ bool Tracker::TrackLocalMap(Frame& frame) {
   }
   // Right after a relocalization the local map must confirm it, more firmly than tracking needs, unless it
   // was a recovery near the prediction (see last_relocalization_recovered_).
+  if (spdlog::should_log(spdlog::level::debug)) {
+    const auto in_view = std::count_if(local_points_.begin(), local_points_.end(),
+                                       [](const MapPoint* p) { return p->track_in_view; });
+    spdlog::debug(
+        "frame {}: {} matched before the local map; local map {} keyframes, {} points, {} in view; {} "
+        "matched, {} inliers",
+        frame.id(), before_local, local_keyframes_.size(), local_points_.size(), in_view, after_local,
+        inliers_);
+  }
   constexpr int kTracked = 30, kRelocalized = 50, kRecovered = 20;
   const bool after_relocalization =
       frame.id() <

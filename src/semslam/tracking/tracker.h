@@ -38,6 +38,10 @@ struct TrackerOptions {
   double keyframe_tracked_ratio_stereo = 0.75;
   double keyframe_collapse_ratio_mono = 0.5;
   double keyframe_collapse_ratio_stereo = 0.25;
+  // A monocular frame tracking fewer map points than this is weak: a keyframe is due without waiting
+  // min_frames, so that new points come in as fast as the old ones leave the view (fast forward motion past
+  // near foliage and parked cars). 0: off.
+  int keyframe_weak_inliers_mono = 100;
   double close_depth_baselines = 40.0;  // stereo: points closer than this many baselines are "close"
   bool localization_only = false;       // track against the map without changing it
   // Keep map points whose fused label is a moving class (person, rider, vehicles) out of tracking and

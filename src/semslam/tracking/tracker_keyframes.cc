@@ -46,10 +46,11 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   const std::uint64_t since_last = frame.id() >= last_kf_frame ? frame.id() - last_kf_frame : max_frames;
   const bool c1a = since_last >= max_frames;
   const bool c1b = since_last >= static_cast<std::uint64_t>(options_.min_frames_between_keyframes);
+  const bool weak = options_.monocular && inliers_ < options_.keyframe_weak_inliers_mono;
   const bool c1c =
       inliers_ < reference_matches * (options_.monocular ? options_.keyframe_collapse_ratio_mono
                                                          : options_.keyframe_collapse_ratio_stereo) ||
-      need_close;
+      need_close || weak;
   const bool c2 = (inliers_ < reference_matches * ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
   if (!mapper_->AcceptsKeyFrames()) mapper_->InterruptBA();
