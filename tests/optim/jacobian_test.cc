@@ -100,7 +100,8 @@ Sim3d RandomSim3(std::mt19937& rng, double log_scale_sigma) {
 // A random camera pose and a world point 3-30 m in front of it.
 std::pair<Rigid3d, Eigen::Vector3d> RandomPoseAndPoint(std::mt19937& rng, const PinholeCamera& camera) {
   const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
-  return {camera_from_world, camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30)};
+  return {camera_from_world,
+          camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30)};
 }
 
 TEST(OptimJacobians, Reprojection) {
@@ -126,7 +127,8 @@ TEST(OptimJacobians, SelfCalibratingReprojection) {
     const auto [camera_from_world, world] = RandomPoseAndPoint(rng, camera);
     // [f, cx, cy, k1, k2]: the nominal camera, then one with distortion of both signs.
     const std::vector<std::vector<double>> intrinsics = {
-        {camera.fx, camera.cx, camera.cy, 0.0, 0.0}, {0.98 * camera.fx, camera.cx + 4, camera.cy - 3, 0.05, -0.02}};
+        {camera.fx, camera.cx, camera.cy, 0.0, 0.0},
+        {0.98 * camera.fx, camera.cx + 4, camera.cy - 3, 0.05, -0.02}};
     for (const std::vector<double>& k : intrinsics) {
       std::unique_ptr<ceres::CostFunction> cost(
           optim_internal::NewSelfCalibratingReprojectionCost(Eigen::Vector2d(600, 180), 1.01, 0.8));
@@ -169,6 +171,10 @@ TEST(OptimJacobians, PositionPriors) {
     const Eigen::Vector3d target = RandomVector(rng, 10.0);
     std::unique_ptr<ceres::CostFunction> plain(optim_internal::NewPositionPriorCost(target, 1.5, false));
     ExpectJacobiansMatch(*plain, {Packed(node)}, {&manifold});
+    // On a point beside the node (a GPS antenna beside the camera).
+    std::unique_ptr<ceres::CostFunction> offset(
+        optim_internal::NewPositionPriorCost(target, 1.5, false, RandomVector(rng, 1.0)));
+    ExpectJacobiansMatch(*offset, {Packed(node)}, {&manifold});
     std::unique_ptr<ceres::CostFunction> framed(optim_internal::NewPositionPriorCost(target, 1.5, true));
     ExpectJacobiansMatch(*framed, {Packed(node), Packed(frame)}, {&manifold, &manifold});
   }

@@ -19,8 +19,8 @@ void GpsFusionOptions::Check() const {
           "GPS fusion translation_sigma_floor_m must be positive");
   Require(std::isfinite(rotation_sigma_rad) && rotation_sigma_rad > 0,
           "GPS fusion rotation_sigma_rad must be positive");
-  Require(std::isfinite(log_scale_sigma) && log_scale_sigma > 0,
-          "GPS fusion log_scale_sigma must be positive");
+  Require(std::isfinite(log_scale_sigma_per_sqrt_m) && log_scale_sigma_per_sqrt_m > 0,
+          "GPS fusion log_scale_sigma_per_sqrt_m must be positive");
   Require(std::isfinite(prior_loss_scale) && prior_loss_scale > 0,
           "GPS fusion prior_loss_scale must be positive");
   Require(std::isfinite(outlier_sigma) && outlier_sigma > 0, "GPS fusion outlier_sigma must be positive");
@@ -62,7 +62,17 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
   const std::vector<FramePose>& sampled_frames = input.frames.empty() ? keyframes : input.frames;
   std::vector<GpsSample> samples =
       SampleGpsPairs(Positions(sampled_frames), input.fixes, enu_frame, options.sampling);
-  const auto prealignment = AlignMapToGps(samples, options.alignment);
+  std::optional<GpsAlignment> prealignment;
+  if (input.enu_from_map) {
+    const Sim3d& given = *input.enu_from_map;
+    Require(given.translation.allFinite() && given.rotation.coeffs().allFinite() &&
+                std::isfinite(given.scale) && given.scale > 0,
+            "GPS fusion: enu_from_map must be finite with a positive scale");
+    if (static_cast<int>(samples.size()) < options.alignment.min_samples) return std::nullopt;
+    prealignment = EvaluateAlignment(*input.enu_from_map, samples, options.alignment);
+  } else {
+    prealignment = AlignMapToGps(samples, options.alignment);
+  }
   if (!prealignment) return std::nullopt;
 
   // 2. Nodes: keyframes, then sampled frames that are not keyframes.
@@ -120,43 +130,70 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
     }
   }
 
-  // 4. Solve; drop fixes far from the fused trajectory; solve again until the set settles.
+  // 4. Solve with every fix, the Cauchy scale graduated down to prior_loss_scale; then drop the fixes far
+  // from the fused trajectory and solve again until the set settles.
   const Sim3d& enu_from_map = prealignment->enu_from_map;
   const double units_per_metre = 1.0 / enu_from_map.scale;
   const bool fix_scale = !options.alignment.estimate_scale;
-  std::vector<bool> active = prealignment->inliers;
+  std::vector<bool> active(samples.size(), true);
   GpsFusionResult result{
       Georeference(enu_frame, enu_from_map), *prealignment, samples, {}, {}, 0, 0.0, {}, 0, {}};
   std::vector<Sim3d> fused(nodes.size());
-  for (int round = 0; round < options.max_rounds; ++round) {
+  for (size_t i = 0; i < nodes.size(); ++i) fused[i] = enu_from_map * Sim3d(nodes[i].world_from_camera);
+  const auto antenna_residuals = [&] {
+    std::vector<double> residuals(samples.size());
+    for (size_t s = 0; s < samples.size(); ++s) {
+      const Sim3d& node = fused[static_cast<size_t>(sample_node[s])];
+      residuals[s] = (node.translation + node.rotation * options.antenna_in_camera_m - samples[s].enu).norm();
+    }
+    return residuals;
+  };
+  // The first scale: the 90th percentile of the samples' distances from the similarity, in sigmas.
+  std::vector<double> spread;
+  {
+    const std::vector<double> initial = antenna_residuals();
+    for (size_t s = 0; s < samples.size(); ++s) spread.push_back(initial[s] / samples[s].sigma_m);
+    std::sort(spread.begin(), spread.end());
+  }
+  double loss_scale = std::max(options.prior_loss_scale, spread[spread.size() * 9 / 10]);
+  const auto solve = [&] {
     PoseGraph graph;
-    for (const FramePose& n : nodes) graph.AddNode(enu_from_map * Sim3d(n.world_from_camera), false);
+    for (const Sim3d& n : fused) graph.AddNode(n, false);
     for (const GraphEdge& e : edges) {
-      const double sigma_t = std::max(options.translation_sigma_fraction * e.a_from_b.translation.norm(),
+      const double length = e.a_from_b.translation.norm();
+      const double sigma_t = std::max(options.translation_sigma_fraction * length,
                                       options.translation_sigma_floor_m * units_per_metre);
-      graph.AddRelativeEdge(e.a, e.b, e.a_from_b,
-                            e.weight * PoseGraph::EdgeInformation(sigma_t, options.rotation_sigma_rad,
-                                                                  options.log_scale_sigma));
+      const double sigma_s = options.log_scale_sigma_per_sqrt_m *
+                             std::sqrt(std::max(length / units_per_metre, options.translation_sigma_floor_m));
+      graph.AddRelativeEdge(
+          e.a, e.b, e.a_from_b,
+          e.weight * PoseGraph::EdgeInformation(sigma_t, options.rotation_sigma_rad, sigma_s));
     }
     for (size_t s = 0; s < samples.size(); ++s) {
-      if (active[s]) graph.AddPositionPrior(sample_node[s], samples[s].enu, samples[s].sigma_m, true);
+      if (active[s]) {
+        graph.AddPositionPrior(sample_node[s], samples[s].enu, samples[s].sigma_m, true,
+                               options.antenna_in_camera_m);
+      }
     }
     PoseGraphOptions graph_options;
     graph_options.fix_scale = fix_scale;
     graph_options.max_iterations = options.max_iterations;
     graph_options.prior_loss = RobustLoss::kCauchy;
-    graph_options.prior_loss_scale = options.prior_loss_scale;
+    graph_options.prior_loss_scale = loss_scale;
     result.summary = graph.Optimize(graph_options);
-    result.rounds = round + 1;
+    ++result.rounds;
     for (size_t i = 0; i < nodes.size(); ++i) fused[i] = graph.world_from_node(static_cast<int>(i));
-
+  };
+  while (loss_scale > options.prior_loss_scale) {
+    solve();
+    loss_scale = std::max(options.prior_loss_scale, 0.5 * loss_scale);
+  }
+  for (int round = 0; round < options.max_rounds; ++round) {
+    solve();
+    result.residuals_m = antenna_residuals();
     std::vector<bool> next(samples.size());
-    result.residuals_m.assign(samples.size(), 0.0);
-    for (size_t s = 0; s < samples.size(); ++s) {
-      result.residuals_m[s] =
-          (fused[static_cast<size_t>(sample_node[s])].translation - samples[s].enu).norm();
+    for (size_t s = 0; s < samples.size(); ++s)
       next[s] = result.residuals_m[s] <= options.outlier_sigma * samples[s].sigma_m;
-    }
     // Done when the kept fixes settle, at the last round, or when too few would be left.
     if (next == active || round + 1 == options.max_rounds ||
         std::count(next.begin(), next.end(), true) < options.alignment.min_samples) {

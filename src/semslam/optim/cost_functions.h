@@ -16,7 +16,8 @@ ceres::CostFunction* NewReprojectionCost(const PinholeCamera& camera, double bf,
                                          double right_u, double sqrt_info);
 
 // Self-calibrating monocular bundle adjustment: parameters camera_from_world (RigidLeftManifold), a world
-// point and the intrinsics [f, cx, cy, k1, k2] (fy = f * aspect, radial distortion as PinholeCamera::Project).
+// point and the intrinsics [f, cx, cy, k1, k2] (fy = f * aspect, radial distortion as
+// PinholeCamera::Project).
 ceres::CostFunction* NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel, double aspect,
                                                         double sqrt_info);
 
@@ -25,7 +26,8 @@ ceres::CostFunction* NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& p
 ceres::CostFunction* NewRelativeSim3Cost(const Sim3d& a_from_b,
                                          const Eigen::Matrix<double, 7, 7>& sqrt_information);
 // Pose graph: parameter world_from_node, and prior_from_graph when `framed`.
-ceres::CostFunction* NewPositionPriorCost(const Eigen::Vector3d& target, double sigma, bool framed);
+ceres::CostFunction* NewPositionPriorCost(const Eigen::Vector3d& target, double sigma, bool framed,
+                                          const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
 
 // Sim(3) refinement: parameter camera1_from_camera2 (Sim3RightManifold). into_camera1: `point` is in camera
 // 2's frame and `pixel` in image 1; otherwise `point` is in camera 1's frame and `pixel` in image 2.

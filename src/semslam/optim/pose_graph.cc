@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -107,17 +108,23 @@ class RelativeSim3Cost final : public ceres::SizedCostFunction<7, kSim3Size, kSi
 };
 
 // (centre - target) / sigma, the centre being world_from_node.translation.
+// (centre + R * offset - target) / sigma: the point `offset` (metres, in the node's frame, e.g. a GPS antenna
+// beside a camera) of a node. Under the right perturbation S * (e^sigma, Exp(phi), rho) the centre moves by
+// s R rho and the offset by -R [offset]x phi; a metric offset does not scale with the node.
 class PositionPriorCost final : public ceres::SizedCostFunction<3, kSim3Size> {
  public:
-  PositionPriorCost(const Eigen::Vector3d& target, double sigma) : target_(target), inv_sigma_(1.0 / sigma) {}
+  PositionPriorCost(const Eigen::Vector3d& target, double sigma, const Eigen::Vector3d& offset)
+      : target_(target), inv_sigma_(1.0 / sigma), offset_(offset) {}
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
     const Sim3View n(parameters[0]);
-    Eigen::Map<Eigen::Vector3d>{residuals} = inv_sigma_ * (n.t - target_);
+    const Eigen::Matrix3d r = n.q.toRotationMatrix();
+    Eigen::Map<Eigen::Vector3d>{residuals} = inv_sigma_ * (n.t + r * offset_ - target_);
     if (jacobians != nullptr && jacobians[0] != nullptr) {
       Eigen::Map<RowMajor3x8> j(jacobians[0]);
       j.setZero();
-      j.block<3, 3>(0, 0) = (inv_sigma_ * std::exp(n.log_s)) * n.q.toRotationMatrix();
+      j.block<3, 3>(0, 0) = (inv_sigma_ * std::exp(n.log_s)) * r;
+      j.block<3, 3>(0, 3) = -inv_sigma_ * r * SkewSymmetric(offset_);
     }
     return true;
   }
@@ -125,6 +132,7 @@ class PositionPriorCost final : public ceres::SizedCostFunction<3, kSim3Size> {
  private:
   Eigen::Vector3d target_;
   double inv_sigma_;
+  Eigen::Vector3d offset_;
 };
 
 // (prior_from_graph * centre - target) / sigma, with prior_from_graph a parameter too.
@@ -166,9 +174,9 @@ ceres::CostFunction* optim_internal::NewRelativeSim3Cost(
 }
 
 ceres::CostFunction* optim_internal::NewPositionPriorCost(const Eigen::Vector3d& target, double sigma,
-                                                          bool framed) {
+                                                          bool framed, const Eigen::Vector3d& offset) {
   if (framed) return new FramedPositionPriorCost(target, sigma);
-  return new PositionPriorCost(target, sigma);
+  return new PositionPriorCost(target, sigma, offset);
 }
 
 int PoseGraph::AddNode(const Sim3d& world_from_node, bool fixed) {
@@ -218,12 +226,13 @@ Eigen::Matrix<double, 7, 7> PoseGraph::EdgeInformation(double sigma_translation,
   return d.asDiagonal();
 }
 
-int PoseGraph::AddPositionPrior(int node, const Eigen::Vector3d& target_position, double sigma_m,
-                                bool robust) {
+int PoseGraph::AddPositionPrior(int node, const Eigen::Vector3d& target_position, double sigma_m, bool robust,
+                                const Eigen::Vector3d& offset_m) {
   CheckNode(node, "AddPositionPrior");
   Require(target_position.allFinite(), "pose graph: AddPositionPrior: target must be finite");
   Require(std::isfinite(sigma_m) && sigma_m > 0, "pose graph: AddPositionPrior: sigma_m must be positive");
-  priors_.push_back({node, target_position, sigma_m, robust});
+  Require(offset_m.allFinite(), "pose graph: AddPositionPrior: offset must be finite");
+  priors_.push_back({node, target_position, sigma_m, robust, offset_m});
   return static_cast<int>(priors_.size()) - 1;
 }
 
@@ -242,8 +251,9 @@ const Sim3d& PoseGraph::world_from_node(int index) const {
 Eigen::Vector3d PoseGraph::PriorError(int index) const {
   Require(index >= 0 && index < num_priors(), "pose graph: PriorError: no such prior");
   const Prior& p = priors_[static_cast<size_t>(index)];
-  const Eigen::Vector3d centre = nodes_[static_cast<size_t>(p.node)].world_from_node.translation;
-  return (estimate_prior_frame_ ? prior_from_graph_ * centre : centre) - p.target;
+  const Sim3d& node = nodes_[static_cast<size_t>(p.node)].world_from_node;
+  const Eigen::Vector3d point = node.translation + node.rotation * p.offset;
+  return (estimate_prior_frame_ ? prior_from_graph_ * point : point) - p.target;
 }
 
 PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
@@ -254,6 +264,9 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
           "pose graph: Optimize: fix a node or add position priors (the gauge)");
   Require(!estimate_prior_frame_ || any_fixed,
           "pose graph: Optimize: estimating the prior frame needs a fixed node (the gauge)");
+  Require(!estimate_prior_frame_ ||
+              std::all_of(priors_.begin(), priors_.end(), [](const Prior& p) { return p.offset.isZero(); }),
+          "pose graph: Optimize: priors with an offset are not supported in an estimated prior frame");
   PoseGraphSummary out;
   if (edges_.empty() && priors_.empty()) return out;
 
@@ -289,7 +302,7 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
     if (estimate_prior_frame_) {
       problem.AddResidualBlock(new FramedPositionPriorCost(p.target, p.sigma), loss, node, frame);
     } else {
-      problem.AddResidualBlock(new PositionPriorCost(p.target, p.sigma), loss, node);
+      problem.AddResidualBlock(new PositionPriorCost(p.target, p.sigma, p.offset), loss, node);
     }
   }
 

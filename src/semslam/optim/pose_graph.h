@@ -63,8 +63,11 @@ class PoseGraph {
                                                      double sigma_log_scale);
   // Absolute constraint on the centre of `node`: target_position in the graph's frame (or the prior frame,
   // see EstimatePriorFrame), isotropic standard deviation sigma_m; robust: PoseGraphOptions::prior_loss.
-  // Returns the prior's index.
-  int AddPositionPrior(int node, const Eigen::Vector3d& target_position, double sigma_m, bool robust = true);
+  // With `offset_m`, on the point that far from the centre along the node's axes, in metres (a GPS antenna
+  // beside a camera: world_from_node.translation + world_from_node.rotation * offset_m); the graph's frame is
+  // then metric (not with EstimatePriorFrame). Returns the prior's index.
+  int AddPositionPrior(int node, const Eigen::Vector3d& target_position, double sigma_m, bool robust = true,
+                       const Eigen::Vector3d& offset_m = Eigen::Vector3d::Zero());
   // Position priors are then in a frame of their own: target = prior_from_graph * centre, with
   // prior_from_graph (e.g. enu_from_world) optimized jointly from this initial guess (e.g. the closed-form
   // alignment of the same pairs), with or without its scale. Needs at least one fixed node (the priors then
@@ -81,7 +84,8 @@ class PoseGraph {
   int num_priors() const { return static_cast<int>(priors_.size()); }
   const Sim3d& world_from_node(int index) const;
   const Sim3d& prior_from_graph() const { return prior_from_graph_; }
-  // prior_from_graph * centre - target, in metres, of prior `index` (after Optimize: its residual).
+  // prior_from_graph * (centre + offset) - target, in metres, of prior `index` (after Optimize: its
+  // residual).
   Eigen::Vector3d PriorError(int index) const;
 
  private:
@@ -99,6 +103,7 @@ class PoseGraph {
     Eigen::Vector3d target = Eigen::Vector3d::Zero();
     double sigma = 1.0;
     bool robust = true;
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   };
 
   void CheckNode(int index, const char* who) const;
