@@ -1,5 +1,6 @@
 // semslam localize: every frame of a sequence relocalized against a saved map without GPS, reported in the
-// map, in WGS84 and as the nearest landmarks with their memberships.
+// map it is found in, and, where that map is in the world, in WGS84 and as the nearest landmarks with their
+// memberships.
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -23,6 +24,8 @@ struct LocalizeArgs : CameraAndOutputArgs {
   std::string config;
   std::string vocabulary;
   size_t landmarks = 3;  // --nearest-landmarks (a count; `run --landmarks` is a file)
+  std::string gps;
+  int gps_every = 30;
   bool quiet = false;
 };
 
@@ -38,11 +41,14 @@ void Run(const LocalizeArgs& args) {
   if (!args.vocabulary.empty()) options.slam.vocabulary = args.vocabulary;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.max_landmarks = args.landmarks;
+  options.gps = args.gps;
+  options.gps_every = args.gps_every;
   options.show_progress = !args.quiet && !Quiet();
   options.overwrite = args.overwrite;
   options.max_bad_frames_in_row = args.max_bad_frames;
   const LocalizeSummary summary = LocalizeSequence(options);
-  std::printf("%zu of %zu frames localized", summary.localized, summary.frames);
+  std::printf("%zu of %zu frames localized (%zu in the world)", summary.localized, summary.frames,
+              summary.in_world);
   if (summary.within_1m >= 0) std::printf(", %.1f %% within 1 m", 100.0 * summary.within_1m);
   if (summary.nearest_landmark_right >= 0) {
     std::printf(", nearest landmark right for %.1f %%", 100.0 * summary.nearest_landmark_right);
@@ -68,6 +74,13 @@ void AddLocalizeCommand(CLI::App& app) {
   cmd->add_option("--config", args->config, "YAML file of SLAM options")->check(CLI::ExistingFile);
   cmd->add_option("--vocabulary", args->vocabulary, "Bag-of-words vocabulary")->check(CLI::ExistingFile);
   cmd->add_option("--nearest-landmarks", args->landmarks, "Nearest landmarks reported per frame")
+      ->capture_default_str();
+  cmd->add_option(
+         "--gps", args->gps,
+         "GPS log of this session (as `run --gps`): places maps the map file does not put in the world")
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--gps-every", args->gps_every, "Use one GPS fix every N frames")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
   cmd->callback([args] { Run(*args); });

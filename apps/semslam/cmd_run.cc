@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cli_support.h"
 #include "commands.h"
@@ -32,6 +33,7 @@ struct RunArgs : CameraAndOutputArgs {
   std::string landmarks;
   bool no_gps_fusion = false;
   int gps_every = 30;
+  std::vector<double> gps_lever_arm;
   bool localization_only = false;
   bool no_loop_closing = false;
   bool quiet = false;
@@ -54,6 +56,10 @@ void Run(const RunArgs& args) {
   options.landmarks = args.landmarks;
   options.gps_fusion = !args.no_gps_fusion;
   options.gps_every = args.gps_every;
+  if (!args.gps_lever_arm.empty()) {
+    options.gps_antenna_in_camera_m =
+        Eigen::Vector3d(args.gps_lever_arm[0], args.gps_lever_arm[1], args.gps_lever_arm[2]);
+  }
   options.seed = args.seed;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.map_in = args.map_in;
@@ -86,15 +92,25 @@ void AddRunCommand(CLI::App& app) {
   cmd->add_option(
          "--segmenter", args->segmenter,
          "Keyframe segmentation: none, espnetv2:FILE.pth or sinet:FILE.pth (Cityscapes state dicts, e.g. "
-         "../shared/data/segmentation_weights), enet:FILE (ENet Torch7), onnx:CARD.yaml, labels:DIR (label or "
+         "../shared/data/segmentation_weights), enet:FILE (ENet Torch7), onnx:CARD.yaml, labels:DIR (label "
+         "or "
          "probability images), truth-noisy:RATE (the synthetic city's labels with noise); optional "
          ",key=value settings (see models/README.md)")
       ->capture_default_str();
   cmd->add_flag(
       "--exclude-dynamic", args->exclude_dynamic,
       "Keep points on persons, riders and vehicles out of tracking and relocalization (needs a segmenter)");
-  cmd->add_option("--gps", args->gps, "GPS log: KITTI oxts folder, CSV (t,lat,lon[,alt,sigma]) or NMEA file")
+  cmd->add_option(
+         "--gps", args->gps,
+         "GPS log: KITTI oxts folder, CSV (t,lat,lon[,alt,sigma]), NMEA or KML file (a KML track without "
+         "times: one position per frame)")
       ->check(CLI::ExistingPath);
+  cmd->add_option("--gps-lever-arm", args->gps_lever_arm,
+                  "Where the GPS antenna is in the camera frame, X,Y,Z metres (x right, y down, z forward); "
+                  "default: from a KITTI raw drive's calibration, else at the camera")
+      ->delimiter(',')
+      ->expected(3)
+      ->check(CLI::Number);
   cmd->add_option("--landmarks", args->landmarks,
                   "Landmark catalogue: CSV (name,lat,lon[,alt,category]), GeoJSON or .osm/.osm.pbf")
       ->check(CLI::ExistingFile);

@@ -167,8 +167,9 @@ std::unique_ptr<ImageSequence> OpenKittiRaw(const fs::path& drive_dir, const Seq
       spdlog::warn("{}: {} readings for {} frames: ground truth for the first {} frames only",
                    (dir / "oxts").string(), records.size(), n, records.size());
     }
-    const std::vector<Rigid3d> poses =
-        OxtsCameraPoses(records, ReadKittiRawRectifiedCameraFromImu(dir, chosen.index));
+    const Rigid3d camera_from_imu = ReadKittiRawRectifiedCameraFromImu(dir, chosen.index);
+    files.gps_antenna_in_camera = camera_from_imu.translation;  // the OXTS unit gives the IMU's position
+    const std::vector<Rigid3d> poses = OxtsCameraPoses(records, camera_from_imu);
     Trajectory truth;
     truth.reserve(poses.size());
     for (size_t i = 0; i < poses.size(); ++i) truth.push_back({files.timestamps[i], poses[i]});

@@ -63,6 +63,7 @@ class FileSequence final : public ImageSequence {
   std::optional<Trajectory> GroundTruth() const override { return files_.ground_truth; }
   std::optional<fs::path> LabelDirectory() const override { return files_.labels; }
   std::optional<fs::path> DepthDirectory() const override { return files_.depth; }
+  std::optional<Eigen::Vector3d> GpsAntennaInCamera() const override { return files_.gps_antenna_in_camera; }
 
  private:
   cv::Mat CheckSize(const fs::path& file, cv::Mat image) const {
@@ -116,16 +117,17 @@ void CheckCameraPlausible(const PinholeCamera& camera, const fs::path& calibrati
   constexpr double kMinFocalPerWidth = 0.0044, kMaxFocalPerWidth = 57.3;
   for (const auto& [name, f] : {std::pair{"fx", camera.fx}, std::pair{"fy", camera.fy}}) {
     if (f < kMinFocalPerWidth * w || f > kMaxFocalPerWidth * w) {
-      throw InputError(SourceLocation{calibration, 0}, name,
-                       fmt::format("focal length {:.6g} px is not that of a camera with {}x{} images (a field of "
-                                   "view of 1 to 179 degrees needs {:.3g}..{:.3g} px)",
-                                   f, camera.width, camera.height, kMinFocalPerWidth * w, kMaxFocalPerWidth * w));
+      throw InputError(
+          SourceLocation{calibration, 0}, name,
+          fmt::format("focal length {:.6g} px is not that of a camera with {}x{} images (a field of "
+                      "view of 1 to 179 degrees needs {:.3g}..{:.3g} px)",
+                      f, camera.width, camera.height, kMinFocalPerWidth * w, kMaxFocalPerWidth * w));
     }
   }
   if (camera.fy > 5 * camera.fx || camera.fx > 5 * camera.fy) {
-    throw InputError(SourceLocation{calibration, 0}, "fx, fy",
-                     fmt::format("fx = {:.6g} and fy = {:.6g} px differ by more than a factor 5", camera.fx,
-                                 camera.fy));
+    throw InputError(
+        SourceLocation{calibration, 0}, "fx, fy",
+        fmt::format("fx = {:.6g} and fy = {:.6g} px differ by more than a factor 5", camera.fx, camera.fy));
   }
   if (camera.cx < -0.5 * w || camera.cx > 1.5 * w || camera.cy < -0.5 * h || camera.cy > 1.5 * h) {
     throw InputError(SourceLocation{calibration, 0}, "cx, cy",

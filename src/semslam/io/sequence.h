@@ -54,6 +54,9 @@ class ImageSequence {
   virtual std::optional<std::filesystem::path> LabelDirectory() const { return std::nullopt; }
   // Folder of per-frame depth images (uint16, metres * 256), when the sequence has one.
   virtual std::optional<std::filesystem::path> DepthDirectory() const { return std::nullopt; }
+  // Where its GPS log's positions were measured, in camera 0's frame (metres), when its calibration says: a
+  // KITTI raw drive's OXTS unit (calib_imu_to_velo.txt, calib_velo_to_cam.txt).
+  virtual std::optional<Eigen::Vector3d> GpsAntennaInCamera() const { return std::nullopt; }
 };
 
 // Opens whatever `path` holds: a KITTI odometry sequence (image_0/ + calib.txt), a KITTI raw drive

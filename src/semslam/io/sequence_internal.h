@@ -26,6 +26,7 @@ struct SequenceFiles {
   std::optional<Trajectory> ground_truth;    // usually one pose per image (a TUM file may differ)
   std::optional<std::filesystem::path> labels;
   std::optional<std::filesystem::path> depth;
+  std::optional<Eigen::Vector3d> gps_antenna_in_camera;  // metres, camera frame
 };
 
 // Reads the first left image for the image size (and checks it against a size the calibration gave, when

@@ -102,12 +102,12 @@ PlotOptions Titled(PlotOptions options, std::string title) {
   return options;
 }
 
-// trajectory.png for every run; ate.png and rpe.png with a ground truth. In the level frame of the ground truth's
-// first camera (metres), the estimate aligned to it as `semslam eval` does (Sim(3) monocular, SE(3) stereo); or,
-// without a ground truth, the estimate in the level map frame (map units when monocular).
+// trajectory.png for every run; ate.png and rpe.png with a ground truth. In the level frame of the ground
+// truth's first camera (metres), the estimate aligned to it as `semslam eval` does (Sim(3) monocular, SE(3)
+// stereo); or, without a ground truth, the estimate in the level map frame (map units when monocular).
 template <typename Write>
-void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>& frames, const PlotOptions& plots,
-                          const Write& write) {
+void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>& frames,
+                          const PlotOptions& plots, const Write& write) {
   if (frames.size() < 2) return;
   const Sim3d level = LevelFromCameraWorld();
   Trajectory estimate;
@@ -118,7 +118,8 @@ void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>&
   std::optional<ErrorSeries> series;
   if (inputs.truth && inputs.truth->size() >= 2) {
     try {
-      series = ComputeErrorSeries(estimate, *inputs.truth, inputs.monocular ? Alignment::kSim3 : Alignment::kSe3);
+      series =
+          ComputeErrorSeries(estimate, *inputs.truth, inputs.monocular ? Alignment::kSim3 : Alignment::kSe3);
     } catch (const EvaluationError& e) {
       spdlog::warn("no error plots: {}", e.what());
     }
@@ -138,8 +139,9 @@ void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>&
                                                            : "Trajectory (top view, map frame)")));
   if (!series) return;
   ErrorPlotInput ate{series->distance_m, series->ate.errors, "ATE (m)"};
-  write("ate.png", RenderErrorPlot(ate, Titled(options, fmt::format("Absolute trajectory error ({} alignment)",
-                                                                      inputs.monocular ? "Sim(3)" : "SE(3)"))));
+  write("ate.png",
+        RenderErrorPlot(ate, Titled(options, fmt::format("Absolute trajectory error ({} alignment)",
+                                                         inputs.monocular ? "Sim(3)" : "SE(3)"))));
   ErrorPlotInput rpe{series->distance_m, series->rpe_trans_m, "RPE translation (m)"};
   rpe.distance_m.erase(rpe.distance_m.begin());
   rpe.error.erase(rpe.error.begin());
@@ -156,9 +158,27 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
   GeoSummary& summary = out.summary;
   const std::vector<FramePose>& trajectory = TrajectoryFrames(inputs);
 
-  // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion.
+  // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion; or the placement found before.
   std::optional<GpsLog> log = inputs.gps;
-  if (!log && !inputs.gps_path.empty()) {
+  std::vector<bool> sample_inliers;
+  Points3d single_similarity_enu;  // per trajectory frame, for the GPS plot
+  if (inputs.placed) {
+    const GeoInputs::Placed& placed = *inputs.placed;
+    log.reset();
+    out.georeference = placed.georeference;
+    out.samples = placed.samples;
+    sample_inliers = placed.inliers;
+    single_similarity_enu = placed.single_similarity_enu;
+    summary.fused = options.fuse;
+    summary.gps_format = placed.gps_format;
+    summary.gps_fixes = placed.gps_fixes;
+    summary.gps_skipped = placed.gps_skipped;
+    summary.time_offset_s = placed.time_offset_s;
+    summary.gps_samples = static_cast<int>(placed.samples.size());
+    summary.gps_inliers = static_cast<int>(std::count(placed.inliers.begin(), placed.inliers.end(), true));
+    summary.fused_rmse_m = placed.fit_rmse_m;
+    summary.single_sim3_rmse_m = placed.single_similarity_rmse_m;
+  } else if (!log && !inputs.gps_path.empty()) {
     log = ReadGps(inputs.gps_path, options.gps_read);
     LogSkippedFixes(*log);  // a log passed in was reported by whoever read it
   }
@@ -197,7 +217,14 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
         summary.gps_inliers = out.alignment->num_inliers;
       }
     }
-    if (out.alignment) summary.single_sim3_rmse_m = out.alignment->inlier_rmse_m;
+    if (out.alignment) {
+      summary.single_sim3_rmse_m = out.alignment->inlier_rmse_m;
+      sample_inliers = out.fusion ? out.fusion->inliers : out.alignment->inliers;
+      if (out.fusion) {
+        for (const FramePose& f : trajectory)
+          single_similarity_enu.push_back(out.alignment->enu_from_map * f.world_from_camera.translation);
+      }
+    }
     if (!out.georeference) {
       spdlog::warn(
           "GPS: {} fixes did not determine the map's place in the world (too few samples every {} frames, "
@@ -246,7 +273,9 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
       out.files.push_back(out_dir / name);
     }
     out.map_sections["topology"] = TopologyJsonString(*out.topology);
-    out.map_sections["geo"] = GeoSectionJson(g, out.landmarks, options.landmarks.sigma_m);
+    GeoContext section{inputs.other_maps, out.landmarks, inputs.map_id, options.landmarks.sigma_m};
+    section.maps.insert_or_assign(inputs.map_id, g);
+    out.map_sections["geo"] = GeoSectionJson(section);
     summary.topology_nodes = static_cast<int>(out.topology->nodes.size());
     summary.topology_landmark_nodes = out.topology->NumLandmarkNodes();
     summary.topology_turn_nodes = out.topology->NumTurnNodes();
@@ -280,20 +309,16 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
     view_options.north_up = out.georeference.has_value();
     view_options.metres = out.georeference.has_value() || !inputs.monocular;
     WriteTrajectoryPlots(inputs, trajectory, options.plots, write);
-    if (out.georeference && out.alignment) {
+    if (out.georeference && !out.samples.empty()) {
       GpsPlotInput gps;
       for (const GpsSample& sample : out.samples) gps.gps_enu.push_back(sample.enu);
-      gps.gps_inliers = out.fusion ? out.fusion->inliers : out.alignment->inliers;
-      if (out.fusion) {
-        for (const FramePose& f : trajectory) {
-          gps.single_sim3_enu.push_back(out.alignment->enu_from_map * f.world_from_camera.translation);
-        }
-      }
+      gps.gps_inliers = sample_inliers;
+      gps.single_sim3_enu = single_similarity_enu;
       gps.trajectory_enu = trajectory_enu;
       write("gps.png",
             RenderGpsPlot(
-                gps, Titled(options.plots, out.fusion ? "GPS fixes and the fused SLAM trajectory"
-                                                      : "GPS fixes and the transformed SLAM trajectory")));
+                gps, Titled(options.plots, summary.fused ? "GPS fixes and the fused SLAM trajectory"
+                                                         : "GPS fixes and the transformed SLAM trajectory")));
     }
     if (out.topology)
       write("topology.png", RenderTopologyPlot(*out.topology, Titled(options.plots, "Topological map")));
@@ -306,9 +331,10 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
         labels.push_back(p.label);
       }
       write("semantic_map.png",
-            RenderSemanticMapPlot(points_enu, labels, trajectory_enu,
-                                  Titled(view_options, out.georeference ? "Semantic map (top view, north up)"
-                                                                        : "Semantic map (top view, map frame)")));
+            RenderSemanticMapPlot(
+                points_enu, labels, trajectory_enu,
+                Titled(view_options, out.georeference ? "Semantic map (top view, north up)"
+                                                      : "Semantic map (top view, map frame)")));
     }
     if (out.georeference && !out.landmarks.empty()) {
       Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -331,17 +357,21 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
   return out;
 }
 
-std::string GeoSectionJson(const Georeference& georeference, const std::vector<PlacedLandmark>& landmarks,
-                           double sigma_m) {
-  const json root = {{"format", "semslam-geo"},
-                     {"version", 1},
-                     {"georeference", json::parse(GeoreferenceToJson(georeference))},
-                     {"landmarks", json::parse(PlacedLandmarksToJson(landmarks))},
-                     {"sigma_m", sigma_m}};
+std::string GeoSectionJson(const GeoContext& context) {
+  json maps = json::array();
+  for (const auto& [map_id, georeference] : context.maps) {
+    maps.push_back({{"map", map_id}, {"georeference", json::parse(GeoreferenceToJson(georeference))}});
+  }
+  json root = {{"format", "semslam-geo"},
+               {"version", 2},
+               {"maps", maps},
+               {"landmarks", json::parse(PlacedLandmarksToJson(context.landmarks))},
+               {"landmarks_map", context.landmarks_map},
+               {"sigma_m", context.sigma_m}};
   return root.dump();
 }
 
-GeoContext ParseGeoSection(const std::string& text, const fs::path& source) {
+GeoContext ParseGeoSection(const std::string& text, const fs::path& source, std::uint32_t single_map_id) {
   const auto fail = [&](const std::string& field, const std::string& message) {
     throw InputError(SourceLocation{source, 0}, field, message);
   };
@@ -354,20 +384,42 @@ GeoContext ParseGeoSection(const std::string& text, const fs::path& source) {
   if (!root.is_object() || root.value("format", std::string()) != "semslam-geo") {
     fail("format", "not a semslam geo section (expected \"format\": \"semslam-geo\")");
   }
-  if (!root.contains("version") || root["version"] != 1) fail("version", "unsupported version");
-  for (const char* key : {"georeference", "landmarks", "sigma_m"}) {
+  if (!root.contains("version") || !root["version"].is_number_integer()) fail("version", "missing");
+  const int version = root["version"].get<int>();
+  if (version != 1 && version != 2) fail("version", fmt::format("unsupported version {}", version));
+  for (const char* key : {"landmarks", "sigma_m"}) {
     if (!root.contains(key)) fail(key, "missing");
   }
   if (!root["sigma_m"].is_number() || !(root["sigma_m"].get<double>() > 0))
     fail("sigma_m", "expected a positive number");
-  GeoContext context{GeoreferenceFromJson(root["georeference"].dump(), source),
-                     PlacedLandmarksFromJson(root["landmarks"].dump(), source),
-                     root["sigma_m"].get<double>()};
+  GeoContext context;
+  context.landmarks = PlacedLandmarksFromJson(root["landmarks"].dump(), source);
+  context.sigma_m = root["sigma_m"].get<double>();
+  if (version == 1) {
+    if (!root.contains("georeference")) fail("georeference", "missing");
+    context.maps.emplace(single_map_id, GeoreferenceFromJson(root["georeference"].dump(), source));
+    context.landmarks_map = single_map_id;
+    return context;
+  }
+  if (!root.contains("maps") || !root["maps"].is_array()) fail("maps", "expected an array");
+  for (const json& entry : root["maps"]) {
+    if (!entry.is_object() || !entry.contains("map") || !entry["map"].is_number_unsigned() ||
+        !entry.contains("georeference")) {
+      fail("maps", "each entry needs \"map\" (a map id) and \"georeference\"");
+    }
+    const auto map_id = entry["map"].get<std::uint32_t>();
+    if (!context.maps.emplace(map_id, GeoreferenceFromJson(entry["georeference"].dump(), source)).second) {
+      fail("maps", fmt::format("map {} is given twice", map_id));
+    }
+  }
+  if (!root.contains("landmarks_map") || !root["landmarks_map"].is_number_unsigned())
+    fail("landmarks_map", "expected a map id");
+  context.landmarks_map = root["landmarks_map"].get<std::uint32_t>();
   return context;
 }
 
-GeoPose LocateInWorld(const Rigid3d& world_from_camera, const GeoContext& context, size_t max_landmarks) {
-  const Georeference& g = context.georeference;
+GeoPose LocateInWorld(const Rigid3d& world_from_camera, const Georeference& g, const GeoContext& context,
+                      bool with_landmarks, size_t max_landmarks) {
   const Eigen::Vector3d centre = world_from_camera.translation;
   GeoPose pose;
   pose.enu = g.MapToEnu(centre);
@@ -380,6 +432,7 @@ GeoPose LocateInWorld(const Rigid3d& world_from_camera, const GeoContext& contex
   double bearing = std::atan2(forward.x(), forward.y()) * 180.0 / std::numbers::pi;
   if (bearing < 0) bearing += 360.0;
   pose.heading_deg = bearing;
+  if (!with_landmarks) return pose;
   for (const NearLandmark& n :
        NearestLandmarks(centre, context.landmarks, g, context.sigma_m, max_landmarks)) {
     pose.nearest.push_back(

@@ -16,6 +16,7 @@
 // and, for `semslam localize`, the map file's extra sections ("geo": georeference and placed landmarks;
 // "topology": the topology JSON that `semslam route` reads).
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -46,6 +47,23 @@ struct GeoInputs {
   bool monocular = true;                 // Sim(3) alignment and fusion; false: SE(3) (stereo)
   std::optional<Trajectory> truth;       // the sequence's ground truth (world_from_camera, metres), for plots
   std::optional<Wgs84> enu_origin;       // default: the first GPS fix
+  // The map of `frames` and `keyframes` already placed in the world by its GPS (system/atlas_georeference.h):
+  // no GPS is read or fused here, and `placed` gives the georeference and what the GPS plot shows.
+  struct Placed {
+    Georeference georeference;
+    std::vector<GpsSample> samples;
+    std::vector<bool> inliers;
+    Points3d single_similarity_enu;  // per frame of `frames`: where one similarity put it (the paper's fit)
+    double fit_rmse_m = 0.0;
+    double single_similarity_rmse_m = 0.0;
+    std::string gps_format;
+    int gps_fixes = 0, gps_skipped = 0;
+    double time_offset_s = 0.0;
+  };
+  std::optional<Placed> placed;
+  std::uint32_t map_id = 0;  // the atlas map of `frames` and `keyframes`
+  // The atlas's other maps in the world, for the map file's geo section (map id -> georeference).
+  std::map<std::uint32_t, Georeference> other_maps;
 };
 
 struct GeoOptions {
@@ -105,16 +123,24 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const std::filesystem::path&
 
 // ---- For `semslam localize` ----
 
-// What the map file's "geo" section holds.
+// What the map file's "geo" section holds: the georeference of each map of the atlas in the world, and the
+// landmarks, placed in one of them.
 struct GeoContext {
-  Georeference georeference;
+  std::map<std::uint32_t, Georeference> maps;  // by map id; a map not named is not in the world
   std::vector<PlacedLandmark> landmarks;
+  std::uint32_t landmarks_map = 0;  // the map the landmarks were placed in
   double sigma_m = 25.0;
+
+  const Georeference* Of(std::uint32_t map_id) const {
+    const auto it = maps.find(map_id);
+    return it == maps.end() ? nullptr : &it->second;
+  }
 };
-std::string GeoSectionJson(const Georeference& georeference, const std::vector<PlacedLandmark>& landmarks,
-                           double sigma_m);
-// Throws InputError naming `source` (e.g. "map.semslam#geo") and the field.
-GeoContext ParseGeoSection(const std::string& text, const std::filesystem::path& source);
+std::string GeoSectionJson(const GeoContext& context);
+// Throws InputError naming `source` (e.g. "map.semslam#geo") and the field. A version-1 section (one map: the
+// whole file's) is read as the georeference of map `single_map_id`.
+GeoContext ParseGeoSection(const std::string& text, const std::filesystem::path& source,
+                           std::uint32_t single_map_id);
 
 struct NamedMembership {
   std::string name;
@@ -127,6 +153,9 @@ struct GeoPose {
   double heading_deg = 0.0;  // compass bearing of the camera's viewing direction (0 north, 90 east)
   std::vector<NamedMembership> nearest;  // nearest landmarks first
 };
-GeoPose LocateInWorld(const Rigid3d& world_from_camera, const GeoContext& context, size_t max_landmarks = 3);
+// A pose of a map in the world (`georeference`: its own); the nearest landmarks only when they were placed in
+// that map.
+GeoPose LocateInWorld(const Rigid3d& world_from_camera, const Georeference& georeference,
+                      const GeoContext& context, bool with_landmarks, size_t max_landmarks = 3);
 
 }  // namespace semslam

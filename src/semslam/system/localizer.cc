@@ -8,16 +8,19 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/eval/trajectory_metrics.h"
+#include "semslam/geo/gps.h"
+#include "semslam/geo/gps_alignment.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
-#include "semslam/core/interrupt.h"
-#include "semslam/system/frame_reader.h"
-#include "semslam/system/run_output_dir.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/system/frame_reader.h"
+#include "semslam/system/run_input_checks.h"
+#include "semslam/system/run_output_dir.h"
 #include "semslam/system/sequence_runner.h"
 
 namespace semslam {
@@ -27,6 +30,7 @@ struct LocalizedFrame {
   size_t frame = 0;
   double timestamp = 0.0;
   bool relocalized = false;
+  std::uint32_t map_id = 0;
   Rigid3d world_from_camera;
   std::optional<GeoPose> geo;
 };
@@ -34,9 +38,9 @@ struct LocalizedFrame {
 std::string CsvLine(const LocalizedFrame& f, size_t max_landmarks) {
   const Eigen::Vector3d& t = f.world_from_camera.translation;
   const Eigen::Quaterniond& q = f.world_from_camera.rotation;
-  std::string line =
-      fmt::format("{},{:.6f},{},{:.6f},{:.6f},{:.6f},{:.9f},{:.9f},{:.9f},{:.9f}", f.frame, f.timestamp,
-                  f.relocalized ? "relocalized" : "tracked", t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  std::string line = fmt::format("{},{:.6f},{},{},{:.6f},{:.6f},{:.6f},{:.9f},{:.9f},{:.9f},{:.9f}", f.frame,
+                                 f.timestamp, f.relocalized ? "relocalized" : "tracked", f.map_id, t.x(),
+                                 t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
   if (f.geo) {
     line += fmt::format(",{:.9f},{:.9f},{:.3f},{:.1f}", f.geo->wgs84.latitude_deg, f.geo->wgs84.longitude_deg,
                         f.geo->wgs84.altitude_m, f.geo->heading_deg);
@@ -70,6 +74,54 @@ std::string NearestTrueLandmark(const SceneTruth& truth, const Eigen::Vector3d& 
   return best;
 }
 
+// The map with the most keyframes (the one a single-map geo section of an old map file stands for).
+std::uint32_t LargestMap(const Map& map) {
+  auto lock = map.ReadLock();
+  std::uint32_t largest = 0;
+  size_t most = 0;
+  for (const std::uint32_t id : map.MapIds()) {
+    if (map.NumKeyFramesOfMap(id) > most) {
+      most = map.NumKeyFramesOfMap(id);
+      largest = id;
+    }
+  }
+  return largest;
+}
+
+// A georeference of the session's own, from its GPS, for each map the map file does not place in the world:
+// the robust similarity (SE(3) for a metric stereo map) of the frames localized in it onto their fixes.
+std::map<std::uint32_t, Georeference> SessionGeoreferences(const std::vector<LocalizedFrame>& localized,
+                                                           const GeoContext& file, const GpsLog& log,
+                                                           bool stereo, int every_n_frames) {
+  std::map<std::uint32_t, Georeference> out;
+  std::map<std::uint32_t, std::vector<FramePosition>> frames;
+  std::vector<double> times;
+  for (const LocalizedFrame& f : localized) {
+    times.push_back(f.timestamp);
+    if (file.Of(f.map_id) == nullptr) {
+      frames[f.map_id].push_back({f.frame, -1, f.timestamp, f.world_from_camera.translation});
+    }
+  }
+  const EnuFrame enu = file.maps.empty() ? MakeEnuFrame(log) : file.maps.begin()->second.enu_frame;
+  GpsSamplingOptions sampling;
+  sampling.every_n_frames = every_n_frames;
+  sampling.time_offset_s = GuessTimeOffset(log.fixes, times);
+  GpsAlignmentOptions alignment;
+  alignment.estimate_scale = !stereo;
+  for (const auto& [map_id, positions] : frames) {
+    const std::vector<GpsSample> samples = SampleGpsPairs(positions, log.fixes, enu, sampling);
+    if (const auto fit = AlignMapToGps(samples, alignment)) {
+      spdlog::info("map {} is placed in the world by this session's GPS: {} of {} fixes, {:.2f} m RMSE",
+                   map_id, fit->num_inliers, samples.size(), fit->inlier_rmse_m);
+      out.emplace(map_id, Georeference(enu, fit->enu_from_map));
+    } else {
+      spdlog::warn("map {}: this session's {} fixes on it do not place it in the world", map_id,
+                   samples.size());
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 void LocalizeOptions::Check() const {
@@ -78,6 +130,7 @@ void LocalizeOptions::Check() const {
   Require(!output.empty(), "localize: --out is required");
   Require(first_frame < end_frame, "localize: the frame range is empty");
   Require(max_landmarks >= 1, "localize: max_landmarks must be >= 1");
+  Require(gps_every >= 1, "localize: --gps-every must be at least 1 frame");
 }
 
 LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
@@ -95,12 +148,21 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   const RunOutputDir output_dir(options.output, output_dir_options);
   SlamSystem slam(slam_options, sequence->camera(), sequence->stereo());
   const MapFileContents contents = slam.LoadMap(options.map);
-  std::optional<GeoContext> geo;
+  GeoContext geo;
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
-    geo = ParseGeoSection(it->second, std::filesystem::path(options.map.string() + "#geo"));
-  } else {
+    geo = ParseGeoSection(it->second, std::filesystem::path(options.map.string() + "#geo"),
+                          LargestMap(slam.map()));
+  }
+  std::optional<GpsLog> gps;
+  if (!options.gps.empty()) {
+    gps = ReadGps(options.gps);
+    TimeFixesByFrame(*gps, FrameTimestamps(*sequence, 0, sequence->size()));
+    LogSkippedFixes(*gps);
+    CheckGpsLog(*gps, FrameTimestamps(*sequence, first, end));
+  } else if (geo.maps.empty()) {
     spdlog::warn(
-        "{} has no georeference (it was built without GPS): poses are reported in the map frame only",
+        "{} has no georeference (it was built without GPS) and no --gps was given: poses are reported in "
+        "the map frame only",
         options.map.string());
   }
 
@@ -118,8 +180,8 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
       f.frame = i;
       f.timestamp = sequence->Timestamp(i);
       f.relocalized = result.relocalized;
+      f.map_id = result.map_id;
       f.world_from_camera = result.camera_from_world->Inverse();
-      if (geo) f.geo = LocateInWorld(f.world_from_camera, *geo, options.max_landmarks);
       localized.push_back(std::move(f));
     }
     progress.Update(i - first + 1, fmt::format("{} localized", localized.size()));
@@ -129,13 +191,33 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   progress.Finish(fmt::format("{} of {} frames localized, {} relocalizations", localized.size(), end - first,
                               stats.relocalizations));
 
+  // In the world only through a georeference of the map each pose is in: the map file's, or this session's
+  // GPS.
+  std::map<std::uint32_t, Georeference> session;
+  if (gps && !gps->fixes.empty())
+    session = SessionGeoreferences(localized, geo, *gps, stereo, options.gps_every);
+  std::map<std::uint32_t, size_t> per_map, per_map_in_world;
+  for (LocalizedFrame& f : localized) {
+    ++per_map[f.map_id];
+    const Georeference* g = geo.Of(f.map_id);
+    if (g == nullptr) {
+      const auto it = session.find(f.map_id);
+      g = it == session.end() ? nullptr : &it->second;
+    }
+    if (g == nullptr) continue;
+    f.geo = LocateInWorld(f.world_from_camera, *g, geo,
+                          f.map_id == geo.landmarks_map && !geo.landmarks.empty(), options.max_landmarks);
+    ++per_map_in_world[f.map_id];
+  }
+
   LocalizeSummary summary;
   summary.frames = end - first;
   summary.localized = localized.size();
   summary.relocalizations = stats.relocalizations;
+  for (const auto& [map_id, n] : per_map_in_world) summary.in_world += n;
 
   Trajectory trajectory;
-  std::string csv = "frame,t,status,x,y,z,qx,qy,qz,qw,lat,lon,alt,heading_deg";
+  std::string csv = "frame,t,status,map,x,y,z,qx,qy,qz,qw,lat,lon,alt,heading_deg";
   for (size_t k = 1; k <= options.max_landmarks; ++k)
     csv += fmt::format(",landmark{0},distance{0}_m,membership{0}", k);
   csv += "\n";
@@ -146,20 +228,33 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteFileAtomically(options.output / "localization.csv", csv);
 
-  nlohmann::json report = {{"map", options.map.string()},        {"sequence", sequence->directory().string()},
-                           {"mode", stereo ? "stereo" : "mono"}, {"frames", summary.frames},
-                           {"localized", summary.localized},     {"relocalizations", summary.relocalizations},
-                           {"georeferenced", geo.has_value()}};
+  nlohmann::json maps = nlohmann::json::array();
+  for (const auto& [map_id, n] : per_map) {
+    const char* world = geo.Of(map_id) != nullptr   ? "map file"
+                        : session.count(map_id) > 0 ? "this session's GPS"
+                                                    : "none";
+    maps.push_back(
+        {{"map", map_id}, {"localized", n}, {"in_world", per_map_in_world[map_id]}, {"georeference", world}});
+  }
+  nlohmann::json report = {{"map", options.map.string()},
+                           {"sequence", sequence->directory().string()},
+                           {"mode", stereo ? "stereo" : "mono"},
+                           {"frames", summary.frames},
+                           {"localized", summary.localized},
+                           {"relocalizations", summary.relocalizations},
+                           {"in_world", summary.in_world},
+                           {"georeferenced", !geo.maps.empty()},
+                           {"maps", maps}};
   // Errors against the truth of a synthetic-city sequence.
   if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && !localized.empty()) {
     const SceneTruth truth = ReadSceneTruth(scene->parent_path());
     std::vector<double> errors;
     size_t landmark_checked = 0, landmark_right = 0;
-    if (geo) {
+    if (summary.in_world > 0) {
       // In the scene's ENU frame, without any alignment: the map's georeference against the drive's truth.
       const EnuFrame scene_enu(truth.origin);
       for (const LocalizedFrame& f : localized) {
-        if (f.frame >= truth.positions_world.size()) continue;
+        if (f.frame >= truth.positions_world.size() || !f.geo) continue;
         const Eigen::Vector3d true_enu = truth.TrueEnu(f.frame);
         errors.push_back((scene_enu.ToEnu(f.geo->wgs84) - true_enu).norm());
         if (!f.geo->nearest.empty() && !truth.landmarks.empty()) {
@@ -195,18 +290,21 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   report["seconds"] = summary.seconds;
   report["bad_frames"] = frame_reader.bad_frames().size();
   const bool interrupted = frames_run < end - first && InterruptRequested();
-  report["status"] = interrupted ? "interrupted" : frame_reader.TooManyInRow() ? "stopped_bad_frames" : "complete";
+  report["status"] = interrupted                   ? "interrupted"
+                     : frame_reader.TooManyInRow() ? "stopped_bad_frames"
+                                                   : "complete";
   WriteFileAtomically(options.output / "localize.json", report.dump(2) + "\n");
   if (interrupted) {
-    throw Interrupted(InterruptSignal(), fmt::format("interrupted by {} after {} of {} frames; what was localized "
-                                                     "is saved in {}",
-                                                     InterruptName(), frames_run, end - first,
-                                                     options.output.string()));
+    throw Interrupted(InterruptSignal(),
+                      fmt::format("interrupted by {} after {} of {} frames; what was localized "
+                                  "is saved in {}",
+                                  InterruptName(), frames_run, end - first, options.output.string()));
   }
   if (frame_reader.TooManyInRow()) {
-    throw InputError(options.output, fmt::format("{} bad frames in a row (the last: {}); localization stopped "
-                                                 "and saved what it did in this folder",
-                                                 frame_reader.bad_in_row(), frame_reader.bad_frames().back().reason));
+    throw InputError(options.output,
+                     fmt::format("{} bad frames in a row (the last: {}); localization stopped "
+                                 "and saved what it did in this folder",
+                                 frame_reader.bad_in_row(), frame_reader.bad_frames().back().reason));
   }
   return summary;
 }

@@ -4,9 +4,14 @@
 // changed), and reported in the map, in WGS84 and as the landmarks it is near, with their fuzzy memberships,
 // through the georeference and landmarks the map file carries.
 //
+// Every map of the file is searched. A pose is in the world only when the map it is in has a georeference
+// (the map file's, or one this session's GPS gives it): a map that is not in the world yields no WGS84
+// position and no landmarks.
+//
 // Writes into the output folder: trajectory.tum (map frame, localized frames), localization.csv (one line per
-// frame: status, map pose, WGS84, heading and the nearest landmarks) and localize.json (summary and, for a
-// synthetic-city sequence, the errors against its truth).
+// frame: status, map, pose in that map, WGS84, heading and the nearest landmarks) and localize.json (summary,
+// the frames per map and whether each is in the world, and, for a synthetic-city sequence, the errors against
+// its truth).
 
 #include <cstddef>
 #include <filesystem>
@@ -26,9 +31,13 @@ struct LocalizeOptions {
   size_t first_frame = 0;
   size_t end_frame = std::numeric_limits<size_t>::max();
   size_t max_landmarks = 3;  // nearest landmarks reported per frame
+  // A GPS log of the session (optional): a map the map file does not place in the world is placed by the
+  // robust similarity of the frames localized in it onto their fixes, one every `gps_every` frames.
+  std::filesystem::path gps;
+  int gps_every = 30;
   bool show_progress = true;
-  bool overwrite = false;              // as RunOptions::overwrite (system/run_output_dir.h)
-  size_t max_bad_frames_in_row = 10;   // as RunOptions::max_bad_frames_in_row
+  bool overwrite = false;             // as RunOptions::overwrite (system/run_output_dir.h)
+  size_t max_bad_frames_in_row = 10;  // as RunOptions::max_bad_frames_in_row
 
   void Check() const;
 };
@@ -36,6 +45,7 @@ struct LocalizeOptions {
 struct LocalizeSummary {
   size_t frames = 0;
   size_t localized = 0;  // frames with a pose
+  size_t in_world = 0;   // of them, in a map with a georeference (they have a WGS84 position)
   size_t relocalizations = 0;
   double seconds = 0.0;
   // Against the truth of a synthetic-city sequence (negative when unknown): the share of all frames localized

@@ -4,12 +4,13 @@
 #include <spdlog/spdlog.h>
 
 #include <charconv>
-#include <span>
 #include <nlohmann/json.hpp>
+#include <span>
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
 #include "semslam/core/interrupt.h"
+#include "semslam/core/log_file.h"
 #include "semslam/core/progress.h"
 #include "semslam/eval/trajectory_metrics.h"
 #include "semslam/geo/gps.h"
@@ -23,16 +24,18 @@
 #include "semslam/semantics/segmenter.h"
 #include "semslam/semantics/semantic_outputs.h"
 #include "semslam/sim/scene_file.h"
+#include "semslam/system/atlas_georeference.h"
 #include "semslam/system/atlas_outputs.h"
-#include "semslam/core/log_file.h"
-#include "semslam/system/frame_trajectory.h"
 #include "semslam/system/frame_reader.h"
+#include "semslam/system/frame_trajectory.h"
 #include "semslam/system/run_input_checks.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/semantic_evaluation.h"
 #include "semslam/system/slam_config.h"
 
 namespace semslam {
+
+namespace fs = std::filesystem;
 
 void RunOptions::Check() const {
   Require(!sequence.empty(), "run: --sequence is required");
@@ -157,8 +160,8 @@ std::optional<Trajectory> TruthOverFrames(const Trajectory& truth, double first_
 // How the frame loop ended, for run.json and the exit status.
 struct FrameLoopEnd {
   std::string status = "complete";
-  size_t last_frame = 0;   // the last frame read (tracked or skipped)
-  size_t frames_run = 0;   // frames read, bad ones included
+  size_t last_frame = 0;  // the last frame read (tracked or skipped)
+  size_t frames_run = 0;  // frames read, bad ones included
 };
 
 nlohmann::json BadFramesJson(const FrameReader& reader) {
@@ -174,16 +177,18 @@ nlohmann::json BadFramesJson(const FrameReader& reader) {
 void ReportEarlyEnd(const FrameLoopEnd& loop, const FrameReader& reader, size_t first, size_t end,
                     const std::filesystem::path& output) {
   if (loop.status == "interrupted") {
-    throw Interrupted(InterruptSignal(),
-                      fmt::format("interrupted by {} after {} of {} frames; the trajectory so far, the map and "
-                                  "run.json (status \"interrupted\") are saved in {}",
-                                  InterruptName(), loop.frames_run, end - first, output.string()));
+    throw Interrupted(
+        InterruptSignal(),
+        fmt::format("interrupted by {} after {} of {} frames; the trajectory so far, the map and "
+                    "run.json (status \"interrupted\") are saved in {}",
+                    InterruptName(), loop.frames_run, end - first, output.string()));
   }
   if (loop.status == "stopped_bad_frames") {
     const BadFrame& last = reader.bad_frames().back();
-    throw InputError(output, fmt::format("{} bad frames in a row up to frame {} (the last: {}); the run stopped "
-                                         "and saved frames {}..{} in this folder",
-                                         reader.bad_in_row(), last.frame, last.reason, first, loop.last_frame));
+    throw InputError(output,
+                     fmt::format("{} bad frames in a row up to frame {} (the last: {}); the run stopped "
+                                 "and saved frames {}..{} in this folder",
+                                 reader.bad_in_row(), last.frame, last.reason, first, loop.last_frame));
   }
 }
 
@@ -193,7 +198,8 @@ nlohmann::json SurfaceJson(const SurfaceScores& e) {
   for (int t = 0; t < kNumClasses; ++t) {
     nlohmann::json row = nlohmann::json::object();
     for (int l = 0; l < kNumClasses; ++l) {
-      if (const auto n = e.confusion[static_cast<size_t>(t)][static_cast<size_t>(l)]) row[std::string(ClassKey(l))] = n;
+      if (const auto n = e.confusion[static_cast<size_t>(t)][static_cast<size_t>(l)])
+        row[std::string(ClassKey(l))] = n;
     }
     if (!row.empty()) confusion[std::string(ClassKey(t))] = row;
   }
@@ -204,6 +210,93 @@ nlohmann::json SurfaceJson(const SurfaceScores& e) {
   j["points_unverified"] = e.points_unverified;
   j["points_unlabeled"] = e.points_unlabeled;
   return j;
+}
+
+// The map with the most keyframes (the one a single-map geo section of an old map file stands for).
+std::uint32_t LargestMap(const Map& map) {
+  auto lock = map.ReadLock();
+  std::uint32_t largest = map.active_map_id();
+  size_t most = 0;
+  for (const std::uint32_t id : map.MapIds()) {
+    if (map.NumKeyFramesOfMap(id) > most) {
+      most = map.NumKeyFramesOfMap(id);
+      largest = id;
+    }
+  }
+  return largest;
+}
+
+// The main map's place in the world for the outputs: where its GPS put it this run (the map now lies in the
+// ENU frame itself), or where an earlier run did.
+std::optional<GeoInputs::Placed> PlacedMainMap(const std::optional<AtlasGeoreference>& placed_by_gps,
+                                               const std::map<std::uint32_t, Georeference>& known,
+                                               std::uint32_t main_map, const std::optional<GpsLog>& log) {
+  if (placed_by_gps && placed_by_gps->enu &&
+      std::count(placed_by_gps->world_maps.begin(), placed_by_gps->world_maps.end(), main_map) > 0) {
+    GeoInputs::Placed placed{Georeference(*placed_by_gps->enu, Sim3d())};
+    for (const MapGeoreferenceSummary& m : placed_by_gps->maps) {
+      if (!m.in_world || (m.map_id != main_map && m.joined_into != main_map)) continue;
+      placed.samples.insert(placed.samples.end(), m.gps_samples.begin(), m.gps_samples.end());
+      placed.inliers.insert(placed.inliers.end(), m.gps_inliers.begin(), m.gps_inliers.end());
+      if (m.map_id == main_map) {
+        for (const auto& [frame, enu] : m.single_similarity_frames)
+          placed.single_similarity_enu.push_back(enu);
+        placed.fit_rmse_m = m.fit_rmse_m;
+        placed.single_similarity_rmse_m = m.single_similarity_rmse_m;
+      }
+    }
+    if (log) {
+      placed.gps_format = log->format;
+      placed.gps_fixes = static_cast<int>(log->fixes.size());
+      placed.gps_skipped = static_cast<int>(log->skipped.size());
+    }
+    placed.time_offset_s = placed_by_gps->time_offset_s;
+    return placed;
+  }
+  const bool placed_this_run =
+      placed_by_gps &&
+      std::any_of(placed_by_gps->maps.begin(), placed_by_gps->maps.end(),
+                  [&](const MapGeoreferenceSummary& m) { return m.map_id == main_map && m.in_world; });
+  if (const auto it = known.find(main_map); it != known.end() && !placed_this_run) {
+    return GeoInputs::Placed{it->second};
+  }
+  return std::nullopt;
+}
+
+// The other maps in the world: placed this run (in its ENU frame), or by an earlier one and not touched
+// since.
+std::map<std::uint32_t, Georeference> OtherMapsInTheWorld(
+    const std::optional<AtlasGeoreference>& placed_by_gps, const std::map<std::uint32_t, Georeference>& known,
+    std::uint32_t main_map) {
+  std::map<std::uint32_t, Georeference> maps = known;
+  if (placed_by_gps && placed_by_gps->enu) {
+    for (const MapGeoreferenceSummary& m : placed_by_gps->maps) {
+      maps.erase(
+          m.map_id);  // a map this run moved, or left out of the world, is no longer where it was known
+      if (m.in_world && !m.joined_into)
+        maps.insert_or_assign(m.map_id, Georeference(*placed_by_gps->enu, Sim3d()));
+    }
+  }
+  maps.erase(main_map);
+  return maps;
+}
+
+nlohmann::json MapsInTheWorldJson(const AtlasGeoreference& atlas) {
+  nlohmann::json maps = nlohmann::json::array();
+  for (const MapGeoreferenceSummary& m : atlas.maps) {
+    nlohmann::json entry = {{"map", m.map_id},
+                            {"frames", m.frames},
+                            {"keyframes", m.keyframes},
+                            {"gps_samples", m.samples},
+                            {"gps_inliers", m.inliers},
+                            {"fit_rmse_m", m.fit_rmse_m},
+                            {"single_similarity_rmse_m", m.single_similarity_rmse_m},
+                            {"in_world", m.in_world}};
+    if (!m.in_world) entry["reason"] = m.reason;
+    if (m.joined_into) entry["joined_into"] = *m.joined_into;
+    maps.push_back(std::move(entry));
+  }
+  return maps;
 }
 
 }  // namespace
@@ -241,7 +334,16 @@ RunSummary RunSequence(const RunOptions& options) {
                stereo ? "stereo" : "monocular", sequence->camera().ToString());
 
   SlamSystem slam(options.slam, sequence->camera(), sequence->stereo());
-  if (!options.map_in.empty()) slam.LoadMap(options.map_in);
+  // Where a loaded map's maps sit in the world, when an earlier run placed them there.
+  std::map<std::uint32_t, Georeference> known_georeferences;
+  if (!options.map_in.empty()) {
+    const MapFileContents contents = slam.LoadMap(options.map_in);
+    if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
+      known_georeferences =
+          ParseGeoSection(it->second, fs::path(options.map_in.string() + "#geo"), LargestMap(slam.map()))
+              .maps;
+    }
+  }
   slam.NameSession(sequence->name(), sequence->directory().string());
   SegmenterContext segmenter_context;
   segmenter_context.truth_label_dir = sequence->LabelDirectory();
@@ -276,8 +378,9 @@ RunSummary RunSequence(const RunOptions& options) {
         keyframes = slam.map().NumKeyFrames();
         points = slam.map().NumMapPoints();
       }
-      tracking_csv += fmt::format("{},{},{:.3f},{},{},{},{:.1f}\n", i, ToString(result.state),
-                                  result.milliseconds, result.matched_points, keyframes, points, CurrentRssMiB());
+      tracking_csv +=
+          fmt::format("{},{},{:.3f},{},{},{},{:.1f}\n", i, ToString(result.state), result.milliseconds,
+                      result.matched_points, keyframes, points, CurrentRssMiB());
       progress.Update(i - first + 1, fmt::format("{}, {} keyframes", ToString(result.state), keyframes));
       continue;
     }
@@ -305,6 +408,17 @@ RunSummary RunSequence(const RunOptions& options) {
     spdlog::info("{} of {} map-point labels took their neighbours' class as one more observation",
                  labels_from_neighbours, labels.size());
   }
+  // Every map with enough GPS is placed in the world, and the maps there are joined.
+  std::optional<AtlasGeoreference> placed_by_gps;
+  if (gps_log) {
+    AtlasGeoreferenceOptions gps_options;
+    gps_options.fuse = options.gps_fusion;
+    gps_options.fusion.sampling.every_n_frames = options.gps_every;
+    gps_options.fusion.alignment.estimate_scale = !stereo;
+    gps_options.fusion.antenna_in_camera_m = options.gps_antenna_in_camera_m.value_or(
+        sequence->GpsAntennaInCamera().value_or(Eigen::Vector3d::Zero()));
+    placed_by_gps = GeoreferenceAtlas(slam, *gps_log, known_georeferences, gps_options);
+  }
   const SlamStatistics stats = slam.Statistics();
   progress.Finish(fmt::format("{} of {} frames tracked, {} keyframes, {} points, {} loops", stats.tracked,
                               stats.frames, stats.keyframes, stats.map_points, stats.loops));
@@ -315,9 +429,9 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteTumTrajectory(options.output / "trajectory.tum", trajectory);
   WriteFramesCsv(options.output / "frames.csv", slam);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
-  const DenseTrajectory kitti =
-      WriteKittiFrameTrajectory(options.output / "trajectory.kitti", slam.FramePoses(), first, first + stats.frames,
-                                std::span<const double>(frame_times).first(stats.frames));
+  const DenseTrajectory kitti = WriteKittiFrameTrajectory(
+      options.output / "trajectory.kitti", slam.FramePoses(), first, first + stats.frames,
+      std::span<const double>(frame_times).first(stats.frames));
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
@@ -326,7 +440,10 @@ RunSummary RunSequence(const RunOptions& options) {
   geo.frames = slam.FramePoses();
   geo.keyframes = slam.KeyFramePoses();
   geo.edges = slam.KeyFrameEdges();
-  geo.gps = gps_log;
+  geo.map_id = slam.MainMapId();
+  geo.placed = PlacedMainMap(placed_by_gps, known_georeferences, geo.map_id, gps_log);
+  geo.other_maps = OtherMapsInTheWorld(placed_by_gps, known_georeferences, geo.map_id);
+  if (!geo.placed) geo.gps = gps_log;  // no map in the world: the output step tries the main map alone
   geo.landmarks = std::move(catalogue);
   geo.landmarks_path = options.landmarks;
   geo.monocular = !stereo;
@@ -337,6 +454,8 @@ RunSummary RunSequence(const RunOptions& options) {
   GeoOptions geo_options;
   geo_options.fuse = options.gps_fusion;
   geo_options.fusion.sampling.every_n_frames = options.gps_every;
+  geo_options.fusion.antenna_in_camera_m = options.gps_antenna_in_camera_m.value_or(
+      sequence->GpsAntennaInCamera().value_or(Eigen::Vector3d::Zero()));
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
@@ -403,8 +522,8 @@ RunSummary RunSequence(const RunOptions& options) {
   }
   run["segmentation"] = segmentation;
   if (const auto label_dir = sequence->LabelDirectory(); label_dir && stats.segmented_keyframes > 0) {
-    // label_accuracy: the 3D measure (the surface each point lies on) when the truth has depth and poses, else
-    // the 2D one (the truth at the point's keypoints); both named in label_accuracy_3d / _2d.
+    // label_accuracy: the 3D measure (the surface each point lies on) when the truth has depth and poses,
+    // else the 2D one (the truth at the point's keypoints); both named in label_accuracy_3d / _2d.
     const SemanticEvaluation evaluation = EvaluateSemantics(slam.map(), *label_dir);
     summary.label_accuracy = evaluation.fused.Accuracy();
     run["label_accuracy_2d"] = evaluation.fused.Accuracy();
@@ -416,8 +535,8 @@ RunSummary RunSequence(const RunOptions& options) {
     if (const auto depth_dir = sequence->DepthDirectory(); depth_dir && truth && trajectory.size() >= 3) {
       try {
         const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
-        const SurfaceEvaluation surface =
-            EvaluateSemantics3d(slam.map(), {*label_dir, *depth_dir, *truth, ate.truth_from_estimate, stereo});
+        const SurfaceEvaluation surface = EvaluateSemantics3d(
+            slam.map(), {*label_dir, *depth_dir, *truth, ate.truth_from_estimate, stereo});
         summary.label_accuracy = surface.per_frame.points.Accuracy();
         run["label_accuracy_3d"] = surface.per_frame.points.Accuracy();
         run["label_accuracy_3d_global"] = surface.global.points.Accuracy();
@@ -451,6 +570,7 @@ RunSummary RunSequence(const RunOptions& options) {
     }
   }
   run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
+  if (placed_by_gps) run["geo"]["maps"] = MapsInTheWorldJson(*placed_by_gps);
   run["provenance"] = ProvenanceJson(options.provenance);
   run["config"] = EffectiveConfigJson(options, slam.options(), end);
   WriteFileAtomically(options.output / "config.yaml", SlamConfigToYaml(slam.options()));

@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 #include <string_view>
 
+#include "semslam/geometry/eigen_types.h"
 #include "semslam/system/run_metadata.h"
 #include "semslam/system/slam_system.h"
 
@@ -32,8 +34,11 @@ struct RunOptions {
   std::filesystem::path gps;
   std::filesystem::path landmarks;
   bool gps_fusion =
-      true;  // pose-graph fusion of the fixes; false: one robust similarity (the paper's method)
+      true;            // pose-graph fusion of the fixes; false: one robust similarity (the paper's method)
   int gps_every = 30;  // frames between the GPS fixes used (one sample per N frames)
+  // Where the GPS antenna is in the camera frame (metres); default: the sequence's calibration says (a KITTI
+  // raw drive's OXTS unit), else at the camera.
+  std::optional<Eigen::Vector3d> gps_antenna_in_camera_m;
   bool save_map = true;
   bool show_progress = true;
   RunProvenance provenance;  // the command line and the binary's version, for run.json
@@ -60,7 +65,8 @@ struct RunSummary {
 
 // Throws InputError for unreadable inputs and InvalidArgument for bad options. A run stopped by a signal
 // (core/interrupt.h) saves the trajectory of the frames done, the map and run.json (status "interrupted"),
-// then throws Interrupted; one stopped by too many bad frames in a row saves the same, then throws InputError.
+// then throws Interrupted; one stopped by too many bad frames in a row saves the same, then throws
+// InputError.
 RunSummary RunSequence(const RunOptions& options);
 
 // Parses "A:B" (either side may be empty) into [first, end). Throws InvalidArgument.

@@ -46,10 +46,11 @@ void SlamOptions::Check() const {
               realtime_wait_for_mapping_frames <= 10,
           "realtime_wait_for_mapping_frames must be in [0, 10]");
   Require(final_global_ba_iterations >= 1, "final_global_ba_iterations must be >= 1");
-  Require(std::isfinite(final_refine_intrinsics_min_reduction) && final_refine_intrinsics_min_reduction >= 0 &&
-              final_refine_intrinsics_min_reduction < 1,
+  Require(std::isfinite(final_refine_intrinsics_min_reduction) &&
+              final_refine_intrinsics_min_reduction >= 0 && final_refine_intrinsics_min_reduction < 1,
           "final_refine_intrinsics_min_reduction must be in [0, 1)");
-  Require(final_refine_intrinsics_min_keyframes >= 3, "final_refine_intrinsics_min_keyframes must be at least 3");
+  Require(final_refine_intrinsics_min_keyframes >= 3,
+          "final_refine_intrinsics_min_keyframes must be at least 3");
   tracker.Check();
   mapper.Check();
   loop.Check();
@@ -286,13 +287,14 @@ void SlamSystem::Finish() {
         const IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back(
             SelfCalibratingGlobalBundleAdjustment(*map_, map_id, global_ba, calibration));
         if (r.accepted) {
-          spdlog::info("map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
-                       "point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; cost {:.0f} -> {:.0f}",
-                       map_id, r.nominal.fx, r.refined.fx, r.nominal.cx, r.nominal.cy, r.refined.cx, r.refined.cy,
-                       r.refined.distortion.k1, r.refined.distortion.k2, r.plain_cost, r.refined_cost);
+          spdlog::info(
+              "map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
+              "point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; cost {:.0f} -> {:.0f}",
+              map_id, r.nominal.fx, r.refined.fx, r.nominal.cx, r.nominal.cy, r.refined.cx, r.refined.cy,
+              r.refined.distortion.k1, r.refined.distortion.k2, r.plain_cost, r.refined_cost);
         } else {
-          spdlog::info("map {}: the intrinsics stay as given: {} (f {:.1f} -> {:.1f}, cost {:.0f} -> {:.0f})", map_id,
-                       r.reason, r.nominal.fx, r.refined.fx, r.plain_cost, r.refined_cost);
+          spdlog::info("map {}: the intrinsics stay as given: {} (f {:.1f} -> {:.1f}, cost {:.0f} -> {:.0f})",
+                       map_id, r.reason, r.nominal.fx, r.refined.fx, r.plain_cost, r.refined_cost);
         }
       } else {
         GlobalBundleAdjustment(*map_, map_id, global_ba);
@@ -344,31 +346,41 @@ std::uint32_t SlamSystem::MainMapId() const {
   return map_->active_map_id();
 }
 
-std::vector<FramePose> SlamSystem::FramePoses() const {
-  const std::uint32_t main = MainMapId();
+std::vector<FramePose> SlamSystem::FramePoses() const { return FramePoses(MainMapId()); }
+
+std::vector<FramePose> SlamSystem::FramePoses(std::uint32_t map_id) const {
   std::vector<FramePose> poses = AllFramePoses();
-  std::erase_if(poses, [main](const FramePose& p) { return p.predicted || p.map_id != main; });
+  std::erase_if(poses, [map_id](const FramePose& p) { return p.predicted || p.map_id != map_id; });
   return poses;
 }
 
-std::vector<FramePose> SlamSystem::KeyFramePoses() const {
-  const std::uint32_t main = MainMapId();
+std::vector<FramePose> SlamSystem::KeyFramePoses() const { return KeyFramePoses(MainMapId(), false); }
+
+std::vector<FramePose> SlamSystem::KeyFramePoses(std::uint32_t map_id, bool all_sessions) const {
   auto lock = map_->ReadLock();
   std::vector<FramePose> poses;
-  for (const KeyFrame* kf : map_->KeyFramesOfMap(main)) {
-    if (kf->is_bad() || kf->session() != map_->current_session()) continue;
+  for (const KeyFrame* kf : map_->KeyFramesOfMap(map_id)) {
+    if (kf->is_bad() || (!all_sessions && kf->session() != map_->current_session())) continue;
     FramePose pose{static_cast<size_t>(kf->frame_id()), static_cast<long long>(kf->id()), kf->timestamp(),
                    kf->world_from_camera()};
-    pose.map_id = main;
+    pose.map_id = map_id;
     poses.push_back(pose);
   }
-  std::sort(poses.begin(), poses.end(),
-            [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+  // Sessions in order, then frames: frame indices restart with each session.
+  std::stable_sort(poses.begin(), poses.end(), [this](const FramePose& a, const FramePose& b) {
+    const std::uint32_t sa = map_->KeyFrameById(static_cast<std::uint64_t>(a.keyframe_id))->session();
+    const std::uint32_t sb = map_->KeyFrameById(static_cast<std::uint64_t>(b.keyframe_id))->session();
+    return sa != sb ? sa < sb : a.frame_index < b.frame_index;
+  });
   return poses;
 }
 
 std::vector<FusionEdge> SlamSystem::KeyFrameEdges(int min_covisibility_weight) const {
-  const std::vector<FramePose> keyframes = KeyFramePoses();
+  return KeyFrameEdges(KeyFramePoses(), min_covisibility_weight);
+}
+
+std::vector<FusionEdge> SlamSystem::KeyFrameEdges(const std::vector<FramePose>& keyframes,
+                                                  int min_covisibility_weight) const {
   auto lock = map_->ReadLock();
   std::unordered_map<std::uint64_t, int> index;
   for (size_t i = 0; i < keyframes.size(); ++i)

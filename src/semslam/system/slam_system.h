@@ -141,6 +141,14 @@ class SlamSystem {
   // The same with frame indices (and keyframe ids), in frame order.
   std::vector<FramePose> FramePoses() const;
   std::vector<FramePose> KeyFramePoses() const;
+  // The same for one map of the atlas: this run's frames with a pose in it (not predicted), and its keyframes
+  // of this session or, with `all_sessions`, of every session (a loaded map's too).
+  std::vector<FramePose> FramePoses(std::uint32_t map_id) const;
+  std::vector<FramePose> KeyFramePoses(std::uint32_t map_id, bool all_sessions) const;
+  // Loop edges and strong covisibility links between `keyframes` (indices into it), with their current
+  // relative poses.
+  std::vector<FusionEdge> KeyFrameEdges(const std::vector<FramePose>& keyframes,
+                                        int min_covisibility_weight = 100) const;
   // Every frame of this run that has a pose in some map (predicted ones included, and marked), in frame
   // order, each with its map id.
   std::vector<FramePose> AllFramePoses() const;

@@ -249,6 +249,7 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
     record.camera_from_reference = frame.camera_from_world() * record.reference->world_from_camera();
     record.reference_scale = record.reference->scale_correction();
     result.camera_from_world = frame.camera_from_world();
+    result.map_id = record.reference->map_id();
     result.matched_points = inliers_;
     const bool previous_tracked = frames_since_tracked_ == 0 && last_tracked_.reference != nullptr;
     if (previous_tracked) last_step_seconds_ = timestamp - last_tracked_.timestamp;

@@ -94,6 +94,7 @@ struct TrackingResult {
   bool new_map = false;  // lost for good: a new map was started with this frame
   int matched_points = 0;
   std::optional<Rigid3d> camera_from_world;
+  std::uint32_t map_id = 0;   // the atlas map camera_from_world is in (when there is one)
   double milliseconds = 0.0;  // time spent tracking this frame (features included)
 };
 
