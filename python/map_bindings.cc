@@ -26,9 +26,26 @@ struct LoadedMap {
   py::list landmarks;      // dicts from the "geo" section
   py::object topology;     // {"nodes": [...], "edges": [...], ...} from the "topology" section, or None
   py::object georeference;  // {"origin", "enu_from_map", ...} or None
+  py::dict cameras;        // map id -> {"nominal": {...}, "camera": {...}, "refined": bool}
   py::list class_names;    // by trainId
   std::map<std::string, std::string> sections;  // every extra section, as text
 };
+
+py::dict CameraDict(const PinholeCamera& c) {
+  py::dict d;
+  d["width"] = c.width;
+  d["height"] = c.height;
+  d["fx"] = c.fx;
+  d["fy"] = c.fy;
+  d["cx"] = c.cx;
+  d["cy"] = c.cy;
+  d["k1"] = c.distortion.k1;
+  d["k2"] = c.distortion.k2;
+  d["p1"] = c.distortion.p1;
+  d["p2"] = c.distortion.p2;
+  d["k3"] = c.distortion.k3;
+  return d;
+}
 
 py::object ParseJson(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
@@ -80,6 +97,13 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
     if (geo.contains("landmarks")) out.landmarks = geo["landmarks"];
     if (geo.contains("georeference")) out.georeference = geo["georeference"];
   }
+  for (const auto& [map_id, camera] : contents.cameras) {
+    py::dict entry;
+    entry["nominal"] = CameraDict(camera.nominal);
+    entry["camera"] = CameraDict(camera.camera);
+    entry["refined"] = camera.refined();
+    out.cameras[py::int_(map_id)] = entry;
+  }
   for (int c = 0; c < kNumClasses; ++c) out.class_names.append(std::string(ClassName(c)));
   out.sections = contents.extra_sections;
   return out;
@@ -102,6 +126,11 @@ void AddMapBindings(py::module_& m) {
       .def_readonly("landmarks", &LoadedMap::landmarks, "placed landmarks (dicts), empty without GPS")
       .def_readonly("topology", &LoadedMap::topology, "the topological map as topology.json has it, or None")
       .def_readonly("georeference", &LoadedMap::georeference, "map -> ENU -> WGS84, or None without GPS")
+      .def_readonly(
+          "cameras", &LoadedMap::cameras,
+          "per map id: the sensor's nominal camera, the camera the map was fitted to (the final BA's "
+          "refinement, with k1, k2, when `refined`), as dicts of width, height, fx, fy, cx, cy, k1, k2, "
+          "p1, p2, k3")
       .def_readonly("class_names", &LoadedMap::class_names, "class names by trainId")
       .def_readonly("sections", &LoadedMap::sections, "every extra section of the file, as text")
       .def("__repr__", [](const LoadedMap& map) {

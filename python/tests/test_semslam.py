@@ -73,6 +73,12 @@ class SemslamModuleTest(unittest.TestCase):
         # Keyframe poses are those of keyframes.tum.
         stamps, poses = semslam.read_trajectory(os.path.join(self.out, "keyframes.tum"))
         np.testing.assert_allclose(np.sort(m.keyframe_timestamps), stamps, atol=1e-6)
+        # The camera of each map: a stereo map keeps the sequence's.
+        self.assertEqual(len(m.cameras), run_json["maps"]["count"])
+        for camera in m.cameras.values():
+            self.assertFalse(camera["refined"])
+            self.assertEqual(camera["camera"], camera["nominal"])
+            self.assertGreater(camera["camera"]["fx"], 0)
         # GPS and landmarks: placed landmarks and the topological map.
         self.assertGreater(len(m.landmarks), 0)
         self.assertIn("name", m.landmarks[0])

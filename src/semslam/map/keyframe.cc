@@ -28,6 +28,12 @@ KeyFrame::KeyFrame(std::uint64_t id, const Frame& frame)
   }
 }
 
+void KeyFrame::ReplaceData(std::shared_ptr<const FrameData> data) {
+  Require(data != nullptr && data->features.size() == data_->features.size(),
+          "keyframe: replaced data must hold the same keypoints");
+  data_ = std::move(data);
+}
+
 void KeyFrame::SetPose(const Rigid3d& camera_from_world) {
   camera_from_world_ = camera_from_world;
   world_from_camera_ = camera_from_world.Inverse();

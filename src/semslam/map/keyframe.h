@@ -42,6 +42,9 @@ class KeyFrame {
   const FeatureSet& features() const { return data_->features; }
   const PinholeCamera& camera() const { return data_->camera; }
   size_t num_features() const { return data_->features.size(); }
+  // The same features through another camera: the final bundle adjustment's refined one re-undistorts the
+  // keypoints (mapping/map_optimization.h). As many keypoints, in the same order. Write lock.
+  void ReplaceData(std::shared_ptr<const FrameData> data);
 
   const Rigid3d& camera_from_world() const { return camera_from_world_; }
   const Rigid3d& world_from_camera() const { return world_from_camera_; }

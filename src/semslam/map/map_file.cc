@@ -3,9 +3,12 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
+#include <map>
 #include <unordered_map>
 
 #include "semslam/core/binary_io.h"
+#include "semslam/core/error.h"
 #include "semslam/map/map_validation.h"
 
 namespace semslam {
@@ -75,6 +78,48 @@ PinholeCamera ReadCamera(BinaryReader& r) {
   return c;
 }
 
+// A map's camera in full: size, intrinsics and the five distortion terms.
+void WriteFullCamera(BinaryWriter& w, const PinholeCamera& c) {
+  w.Put<std::int32_t>(c.width);
+  w.Put<std::int32_t>(c.height);
+  const Distortion& d = c.distortion;
+  for (double v : {c.fx, c.fy, c.cx, c.cy, d.k1, d.k2, d.p1, d.p2, d.k3}) w.Put(v);
+}
+
+PinholeCamera ReadFullCamera(BinaryReader& r) {
+  PinholeCamera c;
+  c.width = r.Get<std::int32_t>();
+  c.height = r.Get<std::int32_t>();
+  for (double* v : {&c.fx, &c.fy, &c.cx, &c.cy, &c.distortion.k1, &c.distortion.k2, &c.distortion.p1,
+                    &c.distortion.p2, &c.distortion.k3}) {
+    *v = r.Get<double>();
+  }
+  constexpr int kMaxImageSide = 1 << 15;
+  // Far beyond any lens PinholeCamera's undistortion converges for.
+  constexpr double kMaxDistortion = 10.0;
+  const Distortion& d = c.distortion;
+  if (c.width <= 0 || c.height <= 0 || c.width > kMaxImageSide || c.height > kMaxImageSide) {
+    r.Fail(fmt::format("camera image size {}x{} is not plausible", c.width, c.height));
+  }
+  if (!(std::isfinite(c.fx) && c.fx > 0 && c.fx <= 1e6 && std::isfinite(c.fy) && c.fy > 0 && c.fy <= 1e6 &&
+        std::abs(c.cx) <= 4.0 * kMaxImageSide && std::abs(c.cy) <= 4.0 * kMaxImageSide)) {
+    r.Fail(
+        fmt::format("camera intrinsics fx={} fy={} cx={} cy={} are not plausible", c.fx, c.fy, c.cx, c.cy));
+  }
+  for (const double v : {d.k1, d.k2, d.p1, d.p2, d.k3}) {
+    if (!(std::abs(v) <= kMaxDistortion))
+      r.Fail(fmt::format("camera distortion term {} is not plausible", v));
+  }
+  return c;
+}
+
+bool SameCamera(const PinholeCamera& a, const PinholeCamera& b) {
+  const Distortion &da = a.distortion, &db = b.distortion;
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
+         a.cy == b.cy && da.k1 == db.k1 && da.k2 == db.k2 && da.p1 == db.p1 && da.p2 == db.p2 &&
+         da.k3 == db.k3;
+}
+
 // Keypoint holds Eigen types (not trivially copyable): stored through a plain record.
 struct StoredKeypoint {
   float x, y, angle_deg, response;
@@ -102,6 +147,18 @@ std::vector<Keypoint> ReadKeypoints(BinaryReader& r) {
 }
 
 }  // namespace
+
+bool MapCamera::refined() const { return !SameCamera(nominal, camera); }
+
+bool MapCamera::operator==(const MapCamera& other) const {
+  return SameCamera(nominal, other.nominal) && SameCamera(camera, other.camera);
+}
+
+MapCamera KeyFrameCameraOfMap(const Map& map, std::uint32_t map_id) {
+  const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
+  Require(!keyframes.empty(), fmt::format("map {} holds no keyframe", map_id));
+  return {keyframes.front()->camera(), keyframes.front()->camera()};
+}
 
 void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
   const FrameData& d = kf.data();
@@ -271,6 +328,15 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
   }
   w.Put<std::uint32_t>(map.active_map_id());
   w.Put<std::uint32_t>(map.next_map_id());
+  const std::vector<std::uint32_t> map_ids = map.MapIds();
+  w.Put<std::uint32_t>(static_cast<std::uint32_t>(map_ids.size()));
+  for (const std::uint32_t map_id : map_ids) {
+    const auto it = extra.cameras.find(map_id);
+    const MapCamera camera = it != extra.cameras.end() ? it->second : KeyFrameCameraOfMap(map, map_id);
+    w.Put<std::uint32_t>(map_id);
+    WriteFullCamera(w, camera.nominal);
+    WriteFullCamera(w, camera.camera);
+  }
   const auto keyframes = map.KeyFrames();
   const auto points = map.MapPoints();
   w.Put<std::uint64_t>(keyframes.size());
@@ -315,6 +381,24 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
     next_map = r.Get<std::uint32_t>();
     if (active_map >= next_map) r.Fail("the active map id is not below the next map id");
   }
+  std::map<std::uint32_t, MapCamera> cameras;
+  if (file.version >= 3) {
+    r.set_context("map cameras");
+    const auto num_cameras = r.Get<std::uint32_t>();
+    if (num_cameras > next_map) r.Fail("more cameras than maps");
+    for (std::uint32_t i = 0; i < num_cameras; ++i) {
+      const auto map_id = r.Get<std::uint32_t>();
+      r.set_context(fmt::format("camera of map {}", map_id));
+      if (map_id >= next_map) r.Fail("the map id is out of range");
+      if (!cameras.empty() && map_id <= cameras.rbegin()->first) r.Fail("the maps are not in id order");
+      MapCamera camera;
+      camera.nominal = ReadFullCamera(r);
+      camera.camera = ReadFullCamera(r);
+      if (camera.camera.width != camera.nominal.width || camera.camera.height != camera.nominal.height)
+        r.Fail("the camera and the nominal one have images of different sizes");
+      cameras[map_id] = camera;
+    }
+  }
   const auto num_keyframes = r.Get<std::uint64_t>();
   std::unordered_map<std::uint64_t, KeyFrame*> by_id;
   std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;
@@ -346,6 +430,11 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
 
   map.RestoreSessions(std::move(sessions));
   map.RestoreMapIds(active_map, next_map);
+  // Older files, and maps the file has no camera for: the keyframes' own camera, as they were fitted to it.
+  for (const std::uint32_t map_id : map.MapIds()) {
+    const auto it = cameras.find(map_id);
+    contents.cameras[map_id] = it != cameras.end() ? it->second : KeyFrameCameraOfMap(map, map_id);
+  }
   // Derived state: covisibility, spanning tree, loop edges, point normals and descriptors.
   const auto keyframes = map.KeyFrames();
   if (file.version == 1 && !keyframes.empty()) MapSerializer::SetOrigin(keyframes.front());

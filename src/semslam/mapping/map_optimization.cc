@@ -374,6 +374,19 @@ void SelfCalibrationOptions::Check() const {
   Require(std::isfinite(min_cost_reduction) && min_cost_reduction >= 0 && min_cost_reduction < 1,
           "self-calibration: min_cost_reduction must be in [0, 1)");
   Require(min_keyframes >= 3, "self-calibration: min_keyframes must be at least 3");
+  Require(std::isfinite(max_focal_change) && max_focal_change >= 0,
+          "self-calibration: max_focal_change must be >= 0");
+  Require(std::isfinite(max_principal_point_shift) && max_principal_point_shift >= 0,
+          "self-calibration: max_principal_point_shift must be >= 0");
+  Require(std::isfinite(max_radial) && max_radial >= 0, "self-calibration: max_radial must be >= 0");
+}
+
+void ExpressKeyFramesInCamera(Map& map, std::uint32_t map_id, const PinholeCamera& camera) {
+  camera.Check();
+  for (KeyFrame* kf : map.KeyFramesOfMap(map_id)) {
+    const FrameData& d = kf->data();
+    kf->ReplaceData(MakeFrameData(camera, d.stereo, d.features, d.right_u, d.depth));
+  }
 }
 
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
@@ -426,17 +439,21 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     refinement.refined_cost = result.final_capped_chi2;
     if (refinement.plain_cost - refinement.refined_cost < calibration.min_cost_reduction * refinement.plain_cost) {
       refinement.reason = "it lowered the cost too little to be told from noise";
-    } else if (std::abs(refined.fx / nominal.fx - 1.0) > 0.10) {
-      refinement.reason = "the focal length moved more than 10 %";
-    } else if (std::abs(refined.cx - nominal.cx) > 0.05 * nominal.width ||
-               std::abs(refined.cy - nominal.cy) > 0.05 * nominal.height) {
-      refinement.reason = "the principal point moved more than 5 % of the image";
-    } else if (std::abs(refined.distortion.k1) > 0.2 || std::abs(refined.distortion.k2) > 0.2) {
-      refinement.reason = "the radial distortion came out above 0.2";
+    } else if (std::abs(refined.fx / nominal.fx - 1.0) > calibration.max_focal_change) {
+      refinement.reason =
+          fmt::format("the focal length moved more than {:g} %", 100 * calibration.max_focal_change);
+    } else if (std::abs(refined.cx - nominal.cx) > calibration.max_principal_point_shift * nominal.width ||
+               std::abs(refined.cy - nominal.cy) > calibration.max_principal_point_shift * nominal.height) {
+      refinement.reason = fmt::format("the principal point moved more than {:g} % of the image",
+                                      100 * calibration.max_principal_point_shift);
+    } else if (std::abs(refined.distortion.k1) > calibration.max_radial ||
+               std::abs(refined.distortion.k2) > calibration.max_radial) {
+      refinement.reason = fmt::format("the radial distortion came out above {:g}", calibration.max_radial);
     } else {
       refinement.accepted = true;
       follow_local_scale();
       ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, {}, false);
+      ExpressKeyFramesInCamera(map, map_id, refined);
     }
   }
   ReleaseFreeMemory();

@@ -137,10 +137,10 @@ void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAd
 // What the self-calibrating global BA of one map did.
 struct IntrinsicsRefinement {
   std::uint32_t map_id = 0;
-  bool accepted = false;  // the map keeps the poses and points of the refined camera
+  bool accepted = false;  // the map keeps the poses and points of the refined camera, and the camera
   std::string reason;     // why not, when not accepted
-  PinholeCamera nominal;
-  PinholeCamera refined;
+  PinholeCamera nominal;  // the camera the map's keyframes carried
+  PinholeCamera refined;  // with the radial terms k1, k2 on the keyframes' keypoints
   // BundleAdjustmentResult::final_capped_chi2 of the plain BA, and of the refinement that followed it.
   double plain_cost = 0.0, refined_cost = 0.0;
 };
@@ -152,20 +152,34 @@ struct SelfCalibrationOptions {
   // Fewer keyframes see too little of the image from too few places to tell the camera from the trajectory: a
   // short map bent by a poor start found a camera 4 % off in focal length and 33 px off in principal point.
   int min_keyframes = 15;
+  // Plausibility: a camera further from the nominal one is a trajectory the images could not pin down, not a
+  // calibration. The focal length within this share of the nominal one, the principal point within this share
+  // of the image's width (cx) and height (cy), and |k1|, |k2| at most max_radial.
+  double max_focal_change = 0.10;
+  double max_principal_point_shift = 0.05;
+  double max_radial = 0.2;
   void Check() const;
 };
 
 // The global BA of a monocular map, then one that also refines the intrinsics
-// (BundleAdjustmentOptions::refine_intrinsics) from its result. The map keeps the refinement only when it earns
-// its five parameters, lowering the robust cost by at least `min_cost_reduction` of it, and is plausible:
-// focal length within 10 % of the nominal one, principal point within 5 % of the image size, |k1|, |k2| < 0.2.
-// Otherwise, and for a map with stereo observations, it keeps the plain BA's result. The keyframes keep the
-// nominal camera: the refinement corrects the poses and points, which is where a slightly wrong calibration
-// bends the trajectory. The intrinsics are shared by the whole map, so a map larger than one window
-// (GlobalBundleAdjustmentOptions) gets the windowed plain BA alone. Write lock held by the caller.
+// (BundleAdjustmentOptions::refine_intrinsics) from its result. The map keeps the refinement only when it
+// earns its five parameters, lowering the robust cost by at least `min_cost_reduction` of it, and is
+// plausible (SelfCalibrationOptions). Otherwise, and for a map with stereo observations, it keeps the plain
+// BA's result. A refinement kept becomes the map's camera: besides the poses and points fitted to it, the
+// keyframes take it (ExpressKeyFramesInCamera), so that whatever reads the map after (semantics, the map
+// file, tracking against it later) sees the camera the map was fitted to. The radial terms apply to the
+// keypoints as the keyframes hold them, which are raw pixels only when the map was tracked with an
+// undistorted camera (the caller's concern: see SlamSystem::Finish). The intrinsics are shared by the whole
+// map, so a map larger than one window (GlobalBundleAdjustmentOptions) gets the windowed plain BA alone.
+// Write lock held by the caller.
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
                                                            const GlobalBundleAdjustmentOptions& options,
                                                            const SelfCalibrationOptions& calibration);
+
+// Gives every keyframe of one map `camera`: their keypoints, pixels of the camera they carry, are taken as
+// pixels of `camera` and undistorted with it (MakeFrameData); each keyframe then carries its ideal pinhole.
+// Write lock.
+void ExpressKeyFramesInCamera(Map& map, std::uint32_t map_id, const PinholeCamera& camera);
 
 // Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
 // cleared from `matches12`. Returns the inlier count. Read lock.

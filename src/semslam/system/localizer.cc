@@ -245,6 +245,17 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
                            {"in_world", summary.in_world},
                            {"georeferenced", !geo.maps.empty()},
                            {"maps", maps}};
+  const TrackingCameraChoice& camera = slam.tracking_camera();
+  const PinholeCamera& c = camera.camera;
+  report["camera"] = {{"source", camera.map_id ? "map" : "sequence"},
+                      {"map", camera.map_id ? nlohmann::json(*camera.map_id) : nlohmann::json()},
+                      {"reason", camera.reason},
+                      {"fx", c.fx},
+                      {"fy", c.fy},
+                      {"cx", c.cx},
+                      {"cy", c.cy},
+                      {"k1", c.distortion.k1},
+                      {"k2", c.distortion.k2}};
   // Errors against the truth of a synthetic-city sequence.
   if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && !localized.empty()) {
     const SceneTruth truth = ReadSceneTruth(scene->parent_path());

@@ -1,5 +1,6 @@
 #include "semslam/system/slam_system.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -40,6 +41,69 @@ std::string_view PacingName(Pacing pacing) {
   return "realtime";
 }
 
+namespace {
+
+// A map's nominal camera is the sensor a sequence has when their images and intrinsics agree; a refined map's
+// when their distortion does too (none: a refinement is made only for a camera without). An unrefined map
+// read from a file of version 2 knows its sensor's intrinsics only (its keyframes' camera), so its distortion
+// is not compared.
+bool SameSensor(const PinholeCamera& sequence, const MapCamera& map, double tolerance_px) {
+  const PinholeCamera& nominal = map.nominal;
+  const bool same_intrinsics = sequence.width == nominal.width && sequence.height == nominal.height &&
+                               std::abs(sequence.fx - nominal.fx) <= tolerance_px &&
+                               std::abs(sequence.fy - nominal.fy) <= tolerance_px &&
+                               std::abs(sequence.cx - nominal.cx) <= tolerance_px &&
+                               std::abs(sequence.cy - nominal.cy) <= tolerance_px;
+  if (!same_intrinsics || !map.refined()) return same_intrinsics;
+  const Distortion &a = sequence.distortion, &b = nominal.distortion;
+  constexpr double kTolerance = 1e-9;
+  return std::abs(a.k1 - b.k1) <= kTolerance && std::abs(a.k2 - b.k2) <= kTolerance &&
+         std::abs(a.p1 - b.p1) <= kTolerance && std::abs(a.p2 - b.p2) <= kTolerance &&
+         std::abs(a.k3 - b.k3) <= kTolerance;
+}
+
+}  // namespace
+
+TrackingCameraChoice ChooseTrackingCamera(const PinholeCamera& sequence, bool stereo,
+                                          const std::map<std::uint32_t, MapCamera>& cameras,
+                                          const std::map<std::uint32_t, size_t>& keyframes_per_map,
+                                          bool* other_sensor, double tolerance_px) {
+  if (other_sensor != nullptr) *other_sensor = false;
+  TrackingCameraChoice choice{sequence, std::nullopt, ""};
+  std::optional<std::uint32_t> largest;
+  size_t most = 0;
+  for (const auto& [map_id, count] : keyframes_per_map) {
+    if (count > most && cameras.count(map_id)) {
+      most = count;
+      largest = map_id;
+    }
+  }
+  if (!largest) {
+    choice.reason = "the sequence's own: no loaded map has a camera";
+    return choice;
+  }
+  const MapCamera& map = cameras.at(*largest);
+  if (!SameSensor(sequence, map, tolerance_px)) {
+    if (other_sensor != nullptr) *other_sensor = true;
+    choice.reason = fmt::format("the sequence's own: it is another camera than map {}'s ({} against {})",
+                                *largest, sequence.ToString(), map.nominal.ToString());
+  } else if (!map.refined()) {
+    choice.reason = fmt::format("the sequence's own: map {} keeps the nominal camera", *largest);
+  } else if (stereo) {
+    choice.reason = fmt::format(
+        "the sequence's own: a stereo session keeps its rectified pair, not map {}'s refined camera",
+        *largest);
+  } else {
+    choice.camera = map.camera;
+    choice.map_id = *largest;
+    choice.reason = fmt::format(
+        "map {}'s refined camera: the map was fitted to it, and the sequence's camera is "
+        "its nominal one",
+        *largest);
+  }
+  return choice;
+}
+
 void SlamOptions::Check() const {
   Require(max_queued_keyframes >= 0, "max_queued_keyframes must be >= 0");
   Require(std::isfinite(realtime_wait_for_mapping_frames) && realtime_wait_for_mapping_frames >= 0 &&
@@ -58,7 +122,10 @@ void SlamOptions::Check() const {
 
 SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,
                        std::optional<StereoRig> stereo)
-    : options_(options), camera_(camera), stereo_(std::move(stereo)) {
+    : options_(options),
+      camera_(camera),
+      stereo_(std::move(stereo)),
+      tracking_camera_{camera, std::nullopt, "the sequence's own: no map loaded"} {
   options_.tracker.monocular = options_.mode == SensorMode::kMonocular;
   options_.mapper.monocular = options_.tracker.monocular;
   options_.loop.fix_scale = !options_.tracker.monocular;
@@ -159,8 +226,40 @@ MapFileContents SlamSystem::LoadMap(const std::filesystem::path& path) {
   spdlog::info("map {} loaded: {} keyframes, {} points, {} maps, {} sessions", path.string(),
                map_->NumKeyFrames(), map_->NumMapPoints(), map_->MapIds().size(),
                map_->sessions().size() - 1);
+  map_cameras_ = contents.cameras;
+  std::map<std::uint32_t, size_t> keyframes_per_map;
+  for (const std::uint32_t map_id : map_->MapIds())
+    keyframes_per_map[map_id] = map_->NumKeyFramesOfMap(map_id);
+  bool other_sensor = false;
+  tracking_camera_ = ChooseTrackingCamera(camera_, options_.mode == SensorMode::kStereo, map_cameras_,
+                                          keyframes_per_map, &other_sensor);
+  if (other_sensor) {
+    spdlog::warn(
+        "{}: frames are undistorted with {}; the map's poses and points were fitted to its own camera",
+        path.string(), tracking_camera_.reason);
+  } else {
+    const Distortion& d = tracking_camera_.camera.distortion;
+    spdlog::info("camera: {} ({}, k1 {:.4f}, k2 {:.4f})", tracking_camera_.reason,
+                 tracking_camera_.camera.ToString(), d.k1, d.k2);
+  }
+  if (tracking_camera_.map_id) tracker_->SetCamera(tracking_camera_.camera);
   tracker_->SetMapLoaded();
   return contents;
+}
+
+MapCamera SlamSystem::SessionCamera() const {
+  if (tracking_camera_.map_id) return map_cameras_.at(*tracking_camera_.map_id);
+  return {camera_, camera_};
+}
+
+std::map<std::uint32_t, MapCamera> SlamSystem::MapCameras() const {
+  auto lock = map_->ReadLock();
+  std::map<std::uint32_t, MapCamera> cameras;
+  for (const std::uint32_t map_id : map_->MapIds()) {
+    const auto it = map_cameras_.find(map_id);
+    cameras[map_id] = it != map_cameras_.end() ? it->second : SessionCamera();
+  }
+  return cameras;
 }
 
 void SlamSystem::NameSession(const std::string& name, const std::string& source) {
@@ -169,8 +268,10 @@ void SlamSystem::NameSession(const std::string& name, const std::string& source)
 }
 
 void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContents& extra) const {
+  MapFileContents contents = extra;
+  contents.cameras.merge(MapCameras());  // the caller's come first
   auto lock = map_->ReadLock();
-  WriteMapFile(path, *map_, extra);
+  WriteMapFile(path, *map_, contents);
 }
 
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
@@ -283,13 +384,29 @@ void SlamSystem::Finish() {
     calibration.min_keyframes = options_.final_refine_intrinsics_min_keyframes;
     for (const std::uint32_t map_id : map_->MapIds()) {
       if (map_->NumKeyFramesOfMap(map_id) <= 2) continue;
-      if (refine) {
+      const auto known = map_cameras_.find(map_id);
+      const MapCamera map_camera = known != map_cameras_.end() ? known->second : SessionCamera();
+      if (refine && !map_camera.camera.distortion.IsZero()) {
+        // The refinement's radial terms act on the keypoints as the keyframes hold them, undistorted already:
+        // kept, they would make a camera no PinholeCamera is, and the map could not record it.
+        GlobalBundleAdjustment(*map_, map_id, global_ba);
+        IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back();
+        r.map_id = map_id;
+        r.nominal = r.refined = map_camera.camera;
+        r.reason = map_camera.refined()
+                       ? "the map was tracked with the refined camera of an earlier session, which it keeps"
+                       : "the camera has lens distortion: a refinement's radial terms cannot be added to it";
+        spdlog::info("map {}: the intrinsics stay as given: {}", map_id, r.reason);
+      } else if (refine) {
         const IntrinsicsRefinement& r = intrinsics_refinements_.emplace_back(
             SelfCalibratingGlobalBundleAdjustment(*map_, map_id, global_ba, calibration));
         if (r.accepted) {
+          // The keyframes' camera was the raw one (no distortion): the refined camera undistorts raw pixels.
+          map_cameras_[map_id] = {map_camera.nominal, r.refined};
           spdlog::info(
-              "map {}: the final bundle adjustment refined the intrinsics: f {:.1f} -> {:.1f}, principal "
-              "point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; cost {:.0f} -> {:.0f}",
+              "map {}: the final bundle adjustment refined the intrinsics, which become the map's camera: "
+              "f {:.1f} -> {:.1f}, principal point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; "
+              "cost {:.0f} -> {:.0f}",
               map_id, r.nominal.fx, r.refined.fx, r.nominal.cx, r.nominal.cy, r.refined.cx, r.refined.cy,
               r.refined.distortion.k1, r.refined.distortion.k2, r.plain_cost, r.refined_cost);
         } else {

@@ -101,6 +101,24 @@ struct SlamStatistics {
   size_t segmented_frames = 0;     // other tracked frames segmented while the worker had time
 };
 
+// The camera a session's frames are undistorted with, once a map is loaded (SlamSystem::LoadMap).
+struct TrackingCameraChoice {
+  PinholeCamera camera;
+  std::optional<std::uint32_t>
+      map_id;  // the loaded map whose refined camera it is; nullopt: the sequence's own
+  std::string reason;
+};
+
+// The loaded maps' camera, or the sequence's own. The map holding the most keyframes decides: its camera when
+// it is a refinement (MapCamera::refined) of the sensor the sequence has, that is when the sequence's camera
+// is the map's nominal one (same image size and distortion, fx, fy, cx, cy within `tolerance_px`; the
+// distortion of an unrefined map is not compared, a version-2 file does not have it). A stereo session keeps
+// its rectified pair's calibration. `other_sensor` tells a sequence of another camera than that map's.
+TrackingCameraChoice ChooseTrackingCamera(const PinholeCamera& sequence, bool stereo,
+                                          const std::map<std::uint32_t, MapCamera>& cameras,
+                                          const std::map<std::uint32_t, size_t>& keyframes_per_map,
+                                          bool* other_sensor = nullptr, double tolerance_px = 0.01);
+
 class SlamSystem {
  public:
   SlamSystem(const SlamOptions& options, const PinholeCamera& camera, std::optional<StereoRig> stereo);
@@ -109,8 +127,14 @@ class SlamSystem {
   SlamSystem& operator=(const SlamSystem&) = delete;
 
   // Loads a map saved by SaveMap before the first frame and begins a new session in it; tracking then starts
-  // by relocalizing (in any of its maps).
+  // by relocalizing (in any of its maps), with the camera ChooseTrackingCamera gives (a warning when the
+  // sequence's camera is another sensor than the map's).
   MapFileContents LoadMap(const std::filesystem::path& path);
+  // The camera frames are undistorted with, and why.
+  const TrackingCameraChoice& tracking_camera() const { return tracking_camera_; }
+  // The camera of each map holding keyframes, as SaveMap writes it: a loaded map's, a refinement the final BA
+  // kept (after Finish), or the camera this session tracks with.
+  std::map<std::uint32_t, MapCamera> MapCameras() const;
   // Names the current session (the sequence this run reads).
   void NameSession(const std::string& name, const std::string& source);
   void SaveMap(const std::filesystem::path& path, const MapFileContents& extra = {}) const;
@@ -171,6 +195,8 @@ class SlamSystem {
   void DiscardActiveMap();
   void OnSegmentation(SegmentationResult&& result);
   void SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left, const TrackingResult& result);
+  // The camera of maps this session makes: the loaded map's whose camera it tracks with, or the sequence's.
+  MapCamera SessionCamera() const;
 
   SlamOptions options_;
   PinholeCamera camera_;
@@ -201,6 +227,9 @@ class SlamSystem {
   static constexpr size_t kRecentImages = 32;
   std::deque<std::pair<std::uint64_t, cv::Mat>> recent_images_;
   std::vector<IntrinsicsRefinement> intrinsics_refinements_;
+  TrackingCameraChoice tracking_camera_;
+  // Maps loaded, and maps whose refined camera the final BA kept; the others have this session's camera.
+  std::map<std::uint32_t, MapCamera> map_cameras_;
 };
 
 }  // namespace semslam

@@ -105,6 +105,12 @@ void Tracker::SetMapLoaded() {
   state_ = TrackingState::kLost;
 }
 
+void Tracker::SetCamera(const PinholeCamera& camera) {
+  Require(records_.empty(), "tracker: the camera can only be set before the first frame");
+  camera.Check();
+  camera_ = camera;
+}
+
 void Tracker::ForgetTrackingState() {
   state_ = TrackingState::kNotInitialized;
   last_frame_.reset();

@@ -147,6 +147,9 @@ class Tracker {
   int num_relocalizations() const { return num_relocalizations_; }
   // Starts from a loaded map: the next frame is relocalized (in any of its maps) instead of initializing.
   void SetMapLoaded();
+  // The camera frames are undistorted with (a loaded map's refined one, SlamSystem::LoadMap); before the first
+  // frame.
+  void SetCamera(const PinholeCamera& camera);
   // Forgets the tracking state (the frame records stay); the System has discarded the active map and
   // started a new one.
   void Reset();
