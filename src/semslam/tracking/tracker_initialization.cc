@@ -87,7 +87,9 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   two_view_options.min_parallax_deg = options_.init_min_parallax_deg;
   two_view_options.parallax_rank = options_.init_parallax_rank;
   two_view_options.min_good_points = options_.init_min_points;
-  const TwoViewResult two_view = InitializeTwoView(pixels1, pixels2, camera_, two_view_options);
+  // The keypoints are undistorted already: the frame's own (pinhole) camera, not the lens's.
+  const TwoViewResult two_view =
+      InitializeTwoView(pixels1, pixels2, init_frame_->data().camera, two_view_options);
   if (!two_view.success) {
     spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
     // Kept to be posed in the map once it starts (a few dozen frames at most: older ones go).
