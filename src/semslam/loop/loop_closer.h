@@ -87,7 +87,7 @@ struct LoopCloserOptions {
   int global_ba_iterations = 10;
   // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map is
   // adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).
-  int global_ba_window_keyframes = 500;
+  int global_ba_window_keyframes = 1000;
   bool enabled = true;
 
   void Check() const;

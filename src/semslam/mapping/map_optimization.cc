@@ -1,14 +1,15 @@
 #include "semslam/mapping/map_optimization.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <set>
 #include <shared_mutex>
 #include <unordered_map>
 #include <unordered_set>
-
-#include <fmt/format.h>
 
 #include "semslam/core/error.h"
 #include "semslam/core/timing.h"
@@ -105,22 +106,24 @@ void LocalScaleOptions::Check() const {
           "local scale: max_spacing_disagreement must be >= 1");
 }
 
-std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes) {
+std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes,
+                                                                     int window_keyframes) {
   Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
   const size_t window = static_cast<size_t>(window_keyframes);
   const size_t count = std::max<size_t>(1, (num_keyframes + window - 1) / window);
   std::vector<std::pair<size_t, size_t>> windows;
-  for (size_t w = 0; w < count; ++w) windows.emplace_back(num_keyframes * w / count, num_keyframes * (w + 1) / count);
+  for (size_t w = 0; w < count; ++w)
+    windows.emplace_back(num_keyframes * w / count, num_keyframes * (w + 1) / count);
   return windows;
 }
 
 namespace {
 
-// One window of a global BA: its keyframes (free) and the live points they observe, started from the poses and
-// positions earlier windows found. The other keyframes of the map observing those points hold still: where the
-// earlier windows put them, or where the loop correction left them. Holding the later ones matters: left out,
-// each window would settle into its own odometry's shape, undoing the loop correction, and the sweep would pile
-// those shapes up into drift (a 10,000-frame town: 7.5 m ATE against 1.9 m).
+// One window of a global BA: its keyframes (free) and the live points they observe, started from the poses
+// and positions earlier windows found. The other keyframes of the map observing those points hold still:
+// where the earlier windows put them, or where the loop correction left them. Holding the later ones matters:
+// left out, each window would settle into its own odometry's shape, undoing the loop correction, and the
+// sweep would pile those shapes up into drift (a 10,000-frame town: 7.5 m ATE against 1.9 m).
 struct WindowProblem {
   std::vector<KeyFrame*> keyframes;  // free, then fixed, as in the problem
   std::vector<MapPoint*> points;
@@ -128,7 +131,8 @@ struct WindowProblem {
   std::vector<ObservationRef> refs;  // per problem observation
 };
 
-// Gathers the points from the window's keyframes, so that the cost of a window follows its size, not the map's.
+// Gathers the points from the window's keyframes, so that the cost of a window follows its size, not the
+// map's.
 WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
                                  const std::unordered_set<const KeyFrame*>& in_map,
                                  const GlobalBundleAdjustmentResult& earlier) {
@@ -364,7 +368,39 @@ int WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& re
   return followers;
 }
 
+namespace {
+
+WindowProblem BuildSpreadProblem(const std::vector<KeyFrame*>& keyframes, size_t max_keyframes);
+
+// A solved spread problem as a result to write: every keyframe of it (the fixed ones where they are), its
+// points and outliers; the keyframes between follow them (WriteGlobalBundleAdjustment).
+GlobalBundleAdjustmentResult SpreadResult(std::uint32_t map_id, const WindowProblem& spread,
+                                          const BundleAdjustmentResult& solved, bool drop_outliers) {
+  GlobalBundleAdjustmentResult result;
+  result.map_id = map_id;
+  KeepWindow(spread, solved, drop_outliers, &result);
+  for (size_t i = 0; i < spread.keyframes.size(); ++i) {
+    result.camera_from_world.emplace(spread.keyframes[i], spread.problem.camera_from_world[i]);
+  }
+  result.windows = 1;
+  return result;
+}
+
+}  // namespace
+
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options) {
+  options.Check();
+  const std::vector<KeyFrame*> keyframes = map.KeyFramesOfMap(map_id);
+  if (keyframes.size() > static_cast<size_t>(options.window_keyframes)) {
+    // Windows hold the keyframes around them still, which keeps a map's large-scale shape as it is: that
+    // shape comes from a spread of the map's keyframes first, which the others follow.
+    WindowProblem spread = BuildSpreadProblem(keyframes, static_cast<size_t>(options.window_keyframes));
+    if (!spread.problem.observations.empty()) {
+      const BundleAdjustmentResult solved = BundleAdjust(spread.problem, SolverOptions(options));
+      WriteGlobalBundleAdjustment(map, SpreadResult(map_id, spread, solved, options.drop_outliers),
+                                  options.follow_local_scale);
+    }
+  }
   WriteGlobalBundleAdjustment(map, AdjustMapInWindows(map, map_id, options, /*lock_map=*/false),
                               options.follow_local_scale);
   ReleaseFreeMemory();
@@ -389,6 +425,54 @@ void ExpressKeyFramesInCamera(Map& map, std::uint32_t map_id, const PinholeCamer
   }
 }
 
+namespace {
+
+// Why a refined camera is not kept (empty: it is).
+std::string RefusalReason(const PinholeCamera& nominal, const PinholeCamera& refined, double plain_cost,
+                          double refined_cost, const SelfCalibrationOptions& calibration) {
+  if (plain_cost - refined_cost < calibration.min_cost_reduction * plain_cost) {
+    return "it lowered the cost too little to be told from noise";
+  }
+  if (std::abs(refined.fx / nominal.fx - 1.0) > calibration.max_focal_change) {
+    return fmt::format("the focal length moved more than {:g} %", 100 * calibration.max_focal_change);
+  }
+  if (std::abs(refined.cx - nominal.cx) > calibration.max_principal_point_shift * nominal.width ||
+      std::abs(refined.cy - nominal.cy) > calibration.max_principal_point_shift * nominal.height) {
+    return fmt::format("the principal point moved more than {:g} % of the image",
+                       100 * calibration.max_principal_point_shift);
+  }
+  if (std::abs(refined.distortion.k1) > calibration.max_radial ||
+      std::abs(refined.distortion.k2) > calibration.max_radial) {
+    return fmt::format("the radial distortion came out above {:g}", calibration.max_radial);
+  }
+  return {};
+}
+
+// Every k-th keyframe of a map too large for one window (its origin among them), fewer than `max_keyframes`,
+// and the points two of them or more observe: the whole map's geometry, and its loops, at the cost of one
+// window.
+WindowProblem BuildSpreadProblem(const std::vector<KeyFrame*>& keyframes, size_t max_keyframes) {
+  const size_t step = (keyframes.size() + max_keyframes - 1) / max_keyframes;
+  WindowProblem built;
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    KeyFrame* kf = keyframes[i];
+    if (!kf->is_bad() && (i % step == 0 || kf->is_map_origin())) built.keyframes.push_back(kf);
+  }
+  std::map<MapPoint*, int, ById> seen;  // by id: the same problem on every run
+  for (KeyFrame* kf : built.keyframes) {
+    for (MapPoint* p : kf->map_points()) {
+      if (p != nullptr && !p->is_bad() && p->observations().count(kf) > 0) ++seen[p];
+    }
+  }
+  for (const auto& [p, n] : seen) {
+    if (n >= 2) built.points.push_back(p);
+  }
+  BuildBundleAdjustmentProblem(built.keyframes, {}, built.points, &built.problem, &built.refs);
+  return built;
+}
+
+}  // namespace
+
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
                                                            const GlobalBundleAdjustmentOptions& options,
                                                            const SelfCalibrationOptions& calibration) {
@@ -401,9 +485,39 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
   refinement.nominal = keyframes.front()->camera();
   refinement.refined = refinement.nominal;
   if (keyframes.size() > static_cast<size_t>(options.window_keyframes)) {
-    GlobalBundleAdjustment(map, map_id, options);
-    refinement.reason = fmt::format("the map's {} keyframes are more than one bundle-adjustment window ({})",
-                                    keyframes.size(), options.window_keyframes);
+    // The camera is the whole map's: it is told from a spread of keyframes that fits one window (which also
+    // gives the map its large-scale shape, as in GlobalBundleAdjustment), and the map, adjusted in windows
+    // after, takes it.
+    WindowProblem spread = BuildSpreadProblem(keyframes, static_cast<size_t>(options.window_keyframes));
+    BundleAdjustmentOptions solver = SolverOptions(options);
+    const bool stereo = std::any_of(spread.problem.observations.begin(), spread.problem.observations.end(),
+                                    [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
+    if (stereo || spread.problem.observations.empty()) {
+      refinement.reason = stereo ? "the map has stereo observations" : "the map's keyframes share no points";
+      GlobalBundleAdjustment(map, map_id, options);
+      return refinement;
+    }
+    const BundleAdjustmentResult plain = BundleAdjust(spread.problem, solver);
+    const GlobalBundleAdjustmentResult plain_result =
+        SpreadResult(map_id, spread, plain, options.drop_outliers);
+    refinement.plain_cost = plain.final_capped_chi2;
+    solver.refine_intrinsics = true;
+    const BundleAdjustmentResult result = BundleAdjust(spread.problem, solver);
+    refinement.refined = *result.refined_camera;
+    refinement.refined_cost = result.final_capped_chi2;
+    refinement.reason = RefusalReason(refinement.nominal, refinement.refined, refinement.plain_cost,
+                                      refinement.refined_cost, calibration);
+    refinement.accepted = refinement.reason.empty();
+    if (refinement.accepted) {
+      WriteGlobalBundleAdjustment(map, SpreadResult(map_id, spread, result, false),
+                                  options.follow_local_scale);
+      ExpressKeyFramesInCamera(map, map_id, refinement.refined);
+    } else {
+      WriteGlobalBundleAdjustment(map, plain_result, options.follow_local_scale);
+    }
+    WriteGlobalBundleAdjustment(map, AdjustMapInWindows(map, map_id, options, /*lock_map=*/false),
+                                options.follow_local_scale);
+    ReleaseFreeMemory();
     return refinement;
   }
   if (keyframes.size() < static_cast<size_t>(calibration.min_keyframes)) {
@@ -437,19 +551,9 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     const PinholeCamera& refined = *result.refined_camera;
     refinement.refined = refined;
     refinement.refined_cost = result.final_capped_chi2;
-    if (refinement.plain_cost - refinement.refined_cost < calibration.min_cost_reduction * refinement.plain_cost) {
-      refinement.reason = "it lowered the cost too little to be told from noise";
-    } else if (std::abs(refined.fx / nominal.fx - 1.0) > calibration.max_focal_change) {
-      refinement.reason =
-          fmt::format("the focal length moved more than {:g} %", 100 * calibration.max_focal_change);
-    } else if (std::abs(refined.cx - nominal.cx) > calibration.max_principal_point_shift * nominal.width ||
-               std::abs(refined.cy - nominal.cy) > calibration.max_principal_point_shift * nominal.height) {
-      refinement.reason = fmt::format("the principal point moved more than {:g} % of the image",
-                                      100 * calibration.max_principal_point_shift);
-    } else if (std::abs(refined.distortion.k1) > calibration.max_radial ||
-               std::abs(refined.distortion.k2) > calibration.max_radial) {
-      refinement.reason = fmt::format("the radial distortion came out above {:g}", calibration.max_radial);
-    } else {
+    refinement.reason =
+        RefusalReason(nominal, refined, refinement.plain_cost, refinement.refined_cost, calibration);
+    if (refinement.reason.empty()) {
       refinement.accepted = true;
       follow_local_scale();
       ApplyBundleAdjustment(map, problem, result, whole.keyframes, whole.points, {}, false);

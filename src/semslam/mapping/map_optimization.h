@@ -28,9 +28,9 @@ void BuildBundleAdjustmentProblem(const std::vector<KeyFrame*>& keyframes,
                                   const std::vector<MapPoint*>& points, BundleAdjustmentProblem* problem,
                                   std::vector<ObservationRef>* refs);
 
-// Removes each observation from its keyframe and its point, and the points left with too few observations from
-// the map; observations the map no longer holds (a keyframe or point turned bad, a point replaced) are skipped.
-// Write lock.
+// Removes each observation from its keyframe and its point, and the points left with too few observations
+// from the map; observations the map no longer holds (a keyframe or point turned bad, a point replaced) are
+// skipped. Write lock.
 void DropObservations(Map& map, const std::vector<ObservationRef>& observations);
 
 // Writes optimized poses and points back (skipping bad ones) and drops outlier observations. Write lock.
@@ -40,19 +40,20 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
                            bool drop_outliers);
 
 // A global BA of bounded memory. The solver's working memory is about as large as the map itself, so a map of
-// more than `window_keyframes` keyframes is adjusted in a sweep of consecutive windows of its keyframes (by id,
-// that is along the drive), each with the points its keyframes observe, and the other keyframes observing them
-// held still (at the poses earlier windows gave them). It refines the map locally and keeps the shape the loop
-// correction gave it at large; a map within one window gets the plain global BA.
+// more than `window_keyframes` keyframes is adjusted in a sweep of consecutive windows of its keyframes (by
+// id, that is along the drive), each with the points its keyframes observe, and the other keyframes observing
+// them held still (at the poses earlier windows gave them). It refines the map locally and keeps the shape
+// the loop correction gave it at large; a map within one window gets the plain global BA.
+// (GlobalBundleAdjustment gives a larger map its large-scale shape first, from a spread of its keyframes.)
 //
-// The Huber kernel only bounds each wrong match's pull, and many of them still bend a map: after the first pass,
-// the observations failing the chi-square test are left out of a second pass of as many iterations and dropped
-// from the map (`drop_outliers`). With them kept, a monocular map's final BA left a stretch of the synthetic city
-// 0.6 % off in scale (seed 1 lost for 2 s at frame 700: 0.176 m ATE, against 0.092 m with them left out of the
-// final BA's second pass, from the same tracking).
+// The Huber kernel only bounds each wrong match's pull, and many of them still bend a map: after the first
+// pass, the observations failing the chi-square test are left out of a second pass of as many iterations and
+// dropped from the map (`drop_outliers`). With them kept, a monocular map's final BA left a stretch of the
+// synthetic city 0.6 % off in scale (seed 1 lost for 2 s at frame 700: 0.176 m ATE, against 0.092 m with them
+// left out of the final BA's second pass, from the same tracking).
 struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
-  int window_keyframes = 500;
+  int window_keyframes = 1000;
   bool drop_outliers = true;
   // Monocular: each keyframe follows the stretch the BA gives the map around it (LocalScaleChanges), so that
   // the frames kept relative to it stretch too.
@@ -63,8 +64,8 @@ struct GlobalBundleAdjustmentOptions {
   void Check() const;  // throws InvalidArgument
 };
 
-// What a global BA found, not yet written into the map: the keyframes it moved, the points, and the observations
-// that failed the chi-square test (GlobalBundleAdjustmentOptions::drop_outliers).
+// What a global BA found, not yet written into the map: the keyframes it moved, the points, and the
+// observations that failed the chi-square test (GlobalBundleAdjustmentOptions::drop_outliers).
 struct GlobalBundleAdjustmentResult {
   std::uint32_t map_id = 0;
   std::unordered_map<KeyFrame*, Rigid3d> camera_from_world;
@@ -74,13 +75,14 @@ struct GlobalBundleAdjustmentResult {
   bool aborted = false;
 };
 
-// [begin, end) of each window over `num_keyframes` keyframes: the fewest windows of at most `window_keyframes`,
-// of near-equal sizes.
-std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes, int window_keyframes);
+// [begin, end) of each window over `num_keyframes` keyframes: the fewest windows of at most
+// `window_keyframes`, of near-equal sizes.
+std::vector<std::pair<size_t, size_t>> GlobalBundleAdjustmentWindows(size_t num_keyframes,
+                                                                     int window_keyframes);
 
-// Runs the global BA of one map of the atlas. With `lock_map`, each window is read under the map's read lock and
-// solved without it (the map may change meanwhile: keyframes and points that turn bad are skipped); without,
-// the caller holds a lock.
+// Runs the global BA of one map of the atlas. With `lock_map`, each window is read under the map's read lock
+// and solved without it (the map may change meanwhile: keyframes and points that turn bad are skipped);
+// without, the caller holds a lock.
 GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t map_id,
                                                 const GlobalBundleAdjustmentOptions& options, bool lock_map);
 
@@ -131,7 +133,10 @@ void FollowLocalScaleChanges(const std::unordered_map<KeyFrame*, double>& change
 int WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& result,
                                 bool follow_local_scale = false);
 
-// Optimizes every keyframe and point of one map of the atlas in place. Write lock held by the caller.
+// Optimizes every keyframe and point of one map of the atlas in place. A map larger than one window is first
+// adjusted on a spread of its keyframes that fits one (every k-th, with the points two of them observe; the
+// keyframes between follow them), then in windows, which alone would keep the large-scale shape it has. Write
+// lock held by the caller.
 void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAdjustmentOptions& options);
 
 // What the self-calibrating global BA of one map did.
@@ -170,8 +175,10 @@ struct SelfCalibrationOptions {
 // file, tracking against it later) sees the camera the map was fitted to. The radial terms apply to the
 // keypoints as the keyframes hold them, which are raw pixels only when the map was tracked with an
 // undistorted camera (the caller's concern: see SlamSystem::Finish). The intrinsics are shared by the whole
-// map, so a map larger than one window (GlobalBundleAdjustmentOptions) gets the windowed plain BA alone.
-// Write lock held by the caller.
+// map: a map larger than one window (GlobalBundleAdjustmentOptions) gets the windowed plain BA, the camera is
+// told from a spread of its keyframes that fits one window (every k-th, with the points two of them observe,
+// solved plain and refined), and when kept the map takes it and is adjusted in windows again. Write lock held
+// by the caller.
 IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32_t map_id,
                                                            const GlobalBundleAdjustmentOptions& options,
                                                            const SelfCalibrationOptions& calibration);
