@@ -20,6 +20,7 @@ struct SynthArgs {
   std::optional<long long> frames;
   std::optional<long long> seed;
   std::optional<long long> traffic_seed;
+  std::optional<long long> route_seed;
   std::optional<double> gps_noise;
   std::optional<long long> gps_every;
   std::optional<double> gps_dropout;
@@ -43,6 +44,7 @@ void Synth(const SynthArgs& a) {
   }
   if (a.seed) o.city.seed = Seed(*a.seed, "--seed");
   if (a.traffic_seed) o.city.traffic_seed = Seed(*a.traffic_seed, "--traffic-seed");
+  if (a.route_seed) o.route.route_seed = Seed(*a.route_seed, "--route-seed");
   o.route.reverse = a.reverse;
   if (a.gps_noise) o.gps.noise = *a.gps_noise;
   if (a.gps_every) {
@@ -58,9 +60,10 @@ void Synth(const SynthArgs& a) {
   o.Check();
   const sim::SyntheticCity city(o);
   spdlog::info(
-      "synth: town of seed {} ({} blocks), {} frames, {:.0f} m, {} turns, {} revisits, {} landmarks -> {}",
-      o.city.seed, o.city.blocks_x * o.city.blocks_y, city.num_frames(), city.route().length,
-      city.route().turns.size(), city.Revisits().size(), city.Landmarks().size(), a.out);
+      "synth: town of seed {} ({} blocks){}, {} frames, {:.0f} m, {} turns, {} revisits, {} landmarks -> {}",
+      o.city.seed, o.city.blocks_x * o.city.blocks_y,
+      a.route_seed ? ", route seed " + std::to_string(*a.route_seed) : std::string(), city.num_frames(),
+      city.route().length, city.route().turns.size(), city.Revisits().size(), city.Landmarks().size(), a.out);
   sim::DatasetOptions d;
   d.progress = !a.quiet && !Quiet();
   sim::WriteDataset(city, a.out, d);
@@ -86,6 +89,10 @@ void AddSynthCommand(CLI::App& app) {
                   "Fraction of fixes replaced by 50 m outliers (default 0)");
   cmd->add_option("--traffic-seed", args->traffic_seed,
                   "Seed of the parked cars, persons and bicycles (a second drive through the same town)");
+  cmd->add_option(
+      "--route-seed", args->route_seed,
+      "Another drive through the same town (same streets, landmarks and origin): drives of any two "
+      "route seeds share streets both ways; without it, the town's first route");
   cmd->add_flag("--reverse", args->reverse, "Drive the same streets in the opposite direction");
   cmd->add_option("--origin-lat", args->lat, "WGS84 latitude of the town origin (default 49.0)");
   cmd->add_option("--origin-lon", args->lon, "WGS84 longitude of the town origin (default 8.4)");

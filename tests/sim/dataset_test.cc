@@ -209,6 +209,18 @@ TEST(SynthCli, WritesADatasetAndRejectsBadArguments) {
   const auto j = nlohmann::json::parse(testing::ReadText(dir / "ok" / "scene.json"));
   EXPECT_EQ(j["seed"], 3);
   EXPECT_EQ(j["options"]["preset"], "small");
+  EXPECT_FALSE(j["options"]["route"].contains("route_seed"));
+  // Another drive through the same town: the same origin and places, another start.
+  r = testing::RunSemslam({"synth", "--out", (dir / "drive2").string(), "--frames", "1", "--preset", "small",
+                           "--seed", "3", "--route-seed", "2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const auto j2 = nlohmann::json::parse(testing::ReadText(dir / "drive2" / "scene.json"));
+  EXPECT_EQ(j2["options"]["route"]["route_seed"], 2);
+  EXPECT_EQ(j2["origin"], j["origin"]);
+  EXPECT_NE(j2["enu_from_world"]["translation"], j["enu_from_world"]["translation"]);
+  r = testing::RunSemslam({"synth", "--out", (dir / "x").string(), "--route-seed", "0"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--route-seed"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -79,6 +79,48 @@ TEST(RouteDynamics, WithinTheLimitsOfACarOnEverySeed) {
   EXPECT_GT(worst_yaw, 3.0 * kDegree);         // the tightest turns do use the limit
 }
 
+// Fleet drives (route seeds) go round the hub and its neighbouring block with the same corners, then on with
+// the loops above: the same limits, never back the way they came, and a loop to close early in the drive.
+TEST(RouteDynamics, FleetDrivesWithinTheLimitsAndLoop) {
+  double worst_yaw = 0, shortest = 1e9;
+  int latest_revisit = 0;
+  size_t fewest_turns = 1000;
+  for (const std::uint64_t town : {1u, 2u, 3u, 4u, 77u, 4242u}) {
+    for (std::uint64_t route_seed = 1; route_seed <= 8; ++route_seed) {
+      SynthOptions o = PresetOptions("default");
+      o.city.seed = town;
+      o.route.route_seed = route_seed;
+      o.route.frames = 1200;
+      const SyntheticCity sim(o);
+      const Route& route = sim.route();
+      const Dynamics d = Measure(route, o.route.rate_hz);
+      const std::string where = "town " + std::to_string(town) + ", route seed " +
+                                std::to_string(route_seed) + ", frame " + std::to_string(d.worst_frame);
+      EXPECT_LE(d.max_yaw_rate, kRouteMaxYawRate * 1.01) << where;
+      EXPECT_LE(d.max_lateral, kRouteMaxLateralAcceleration * 1.02) << where;
+      worst_yaw = std::max(worst_yaw, d.max_yaw_per_frame);
+      const std::vector<int>& seq = route.intersections;
+      for (size_t k = 2; k < seq.size(); ++k) EXPECT_NE(seq[k], seq[k - 2]) << where << ", step " << k;
+      fewest_turns = std::min(fewest_turns, route.turns.size());
+      shortest = std::min(shortest, route.length);
+      const std::vector<Revisit> revisits = sim.Revisits();
+      ASSERT_FALSE(revisits.empty()) << where;
+      latest_revisit = std::max(latest_revisit, revisits.front().frame);
+      EXPECT_GE(sim.Landmarks().size(), 8u) << where;
+    }
+  }
+  RecordProperty("max_yaw_deg_per_frame", std::to_string(worst_yaw / kDegree));
+  RecordProperty("latest_first_revisit_frame", std::to_string(latest_revisit));
+  RecordProperty("fewest_turns", std::to_string(fewest_turns));
+  RecordProperty("shortest_m", std::to_string(shortest));
+  EXPECT_LE(worst_yaw, 4.0 * kDegree * 1.01);
+  // Measured: the first loop closed by frame 568 at the latest, 8 turns or more, 1001 m or more in 1200
+  // frames (more turns than today's drive, which covers 1200 m or more).
+  EXPECT_LT(latest_revisit, 600);
+  EXPECT_GE(fewest_turns, 6u);
+  EXPECT_GT(shortest, 950.0);
+}
+
 TEST(RouteDynamics, SeedsOfTheIssue) {
   // The towns issue 9 measured: 4242 (a U-turn, 25.6 deg per frame) and 5150 (6.1 deg per frame at 8 m/s).
   for (const std::uint64_t town : {4242u, 5150u}) {

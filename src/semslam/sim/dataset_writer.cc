@@ -75,6 +75,8 @@ Json OptionsJson(const SynthOptions& o) {
                 {"camera_height", o.route.camera_height},
                 {"reverse", o.route.reverse},
                 {"seed", o.route.seed != 0 ? o.route.seed : o.city.seed}};
+  // Only for a fleet drive: today's scene.json stays as it was.
+  if (o.route.route_seed != 0) j["route"]["route_seed"] = o.route.route_seed;
   j["camera"] = {{"width", o.camera.width},
                  {"height", o.camera.height},
                  {"focal", o.camera.focal},

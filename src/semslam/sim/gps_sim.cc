@@ -16,7 +16,12 @@ double Clean(double v, double scale = 1e6) {
 std::vector<StampedOxts> SimulateOxts(const SyntheticCity& sim) {
   const GpsOptions& gps = sim.options().gps;
   const Route& route = sim.route();
-  const std::uint64_t seed = gps.seed != 0 ? gps.seed : HashCombine(sim.options().city.seed, 0x6b5);
+  // A fleet drive (route_seed) has its own GPS noise, as drives on other days do.
+  const std::uint64_t route_seed = sim.options().route.route_seed;
+  const std::uint64_t town_seed = HashCombine(sim.options().city.seed, 0x6b5);
+  const std::uint64_t seed = gps.seed != 0     ? gps.seed
+                             : route_seed == 0 ? town_seed
+                                               : HashCombine(town_seed, Hash3(13, route_seed, 3));
   std::vector<StampedOxts> readings;
   for (size_t f = 0; f < sim.num_frames(); f += static_cast<size_t>(gps.every)) {
     Rng rng = Rng::Stream(seed, f);

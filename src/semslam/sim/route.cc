@@ -6,6 +6,7 @@
 
 #include "semslam/core/error.h"
 #include "semslam/sim/random.h"
+#include "semslam/sim/route_tour.h"
 
 namespace semslam::sim {
 namespace {
@@ -47,8 +48,34 @@ class IntersectionPlanner {
     const int pi = i_ - kDi[heading_], pj = j_ - kDj[heading_];
     if (g_.Drivable(pi, pj)) seq_.push_back(g_.IntersectionId(pi, pj));
     seq_.push_back(g_.IntersectionId(i_, j_));
+    Extend(needed_length, /*first=*/true);
+    return seq_;
+  }
+
+  // Goes on from the end of a planned drive (two intersections or more), with the loops of Plan(), through
+  // none of the `avoid` intersections (unless the town leaves no other way).
+  std::vector<int> Continue(std::vector<int> seq, double needed_length, std::vector<int> avoid) {
+    avoid_ = std::move(avoid);
+    Require(seq.size() >= 2, "PlanRoute: a drive to continue needs two intersections");
+    seq_ = std::move(seq);
+    const int last = seq_.back(), before = seq_[seq_.size() - 2];
+    i_ = g_.I(last);
+    j_ = g_.J(last);
+    heading_ = -1;
+    for (int h = 0; h < 4; ++h) {
+      if (g_.I(before) + kDi[h] == i_ && g_.J(before) + kDj[h] == j_) heading_ = h;
+    }
+    Require(heading_ >= 0,
+            "PlanRoute: the drive to continue does not end between neighbouring intersections");
+    arrival_ = heading_;
+    Extend(needed_length, /*first=*/false);
+    return seq_;
+  }
+
+ private:
+  // Adds loops until the drive is `needed_length` long; the first loop of a drive is a small one.
+  void Extend(double needed_length, bool first) {
     int sense = rng_.Bernoulli(0.5) ? 1 : -1;
-    bool first = true;
     while (Length() < needed_length) {
       bool placed = false;
       for (int attempt = 0; attempt < 60 && !placed; ++attempt) {
@@ -66,10 +93,8 @@ class IntersectionPlanner {
       if (!placed) Fallback();
       first = false;
     }
-    return seq_;
   }
 
- private:
   double Length() const {
     double total = 0;
     for (size_t k = 1; k < seq_.size(); ++k)
@@ -91,7 +116,11 @@ class IntersectionPlanner {
         i += kDi[h];
         j += kDj[h];
         if (!g_.Drivable(i, j)) return false;
-        added.push_back(g_.IntersectionId(i, j));
+        const int id = g_.IntersectionId(i, j);
+        // A loop comes back to where it starts: that one may be avoided.
+        if (id != g_.IntersectionId(i_, j_) && std::find(avoid_.begin(), avoid_.end(), id) != avoid_.end())
+          return false;
+        added.push_back(id);
       }
     }
     // The last move is a turn that the next module's first block completes: it must lead somewhere.
@@ -133,6 +162,7 @@ class IntersectionPlanner {
   const StreetGrid& g_;
   Rng& rng_;
   std::vector<int> seq_;
+  std::vector<int> avoid_;
   int i_ = 0, j_ = 0, heading_ = 0;
   int arrival_ = 0;  // the heading of the last block driven
 };
@@ -256,11 +286,21 @@ Route PlanRoute(const City& city, const RouteOptions& options) {
   options.Check();
   const StreetGrid& g = city.grid;
   Require(g.ni() >= 4 && g.nj() >= 4, "PlanRoute: the town needs at least 3 x 3 blocks");
-  Rng rng = Rng::Stream(options.seed != 0 ? options.seed : city.options.seed, 11);
+  const std::uint64_t base_seed = options.seed != 0 ? options.seed : city.options.seed;
   const double duration = (options.frames - 1) / options.rate_hz;
   const double needed = duration * options.max_speed + 250.0;
-  IntersectionPlanner planner(g, rng);
-  std::vector<int> seq = planner.Plan(needed);
+  std::vector<int> seq;
+  if (options.route_seed == 0) {
+    Rng rng = Rng::Stream(base_seed, 11);
+    seq = IntersectionPlanner(g, rng).Plan(needed);
+  } else {
+    Rng rng = Rng::Stream(base_seed, Hash3(13, options.route_seed, 0));
+    std::vector<int> hub_tour = PlanHubTour(g, city.options.seed, options.route_seed, rng);
+    // Away from the hub: what follows is the drive's own.
+    const TownHub hub = FindTownHub(g, city.options.seed);
+    seq = IntersectionPlanner(g, rng).Continue(std::move(hub_tour), needed,
+                                               std::vector<int>(hub.corners.begin(), hub.corners.end()));
+  }
   if (options.reverse) std::reverse(seq.begin(), seq.end());
   const double start_fraction = 0.5;
   const DensePath path = BuildPath(g, seq, start_fraction);
@@ -280,9 +320,10 @@ Route PlanRoute(const City& city, const RouteOptions& options) {
   std::vector<double> cruise(seq.size());
   const double cruise_lo = std::min(std::max(options.min_speed, 10.0), options.max_speed);
   // One stream per street of the drive: a longer drive starts exactly as a shorter one.
-  const std::uint64_t route_seed = options.seed != 0 ? options.seed : city.options.seed;
+  const std::uint64_t speed_seed =
+      options.route_seed == 0 ? base_seed : HashCombine(base_seed, Hash3(13, options.route_seed, 1));
   for (size_t k = 0; k < cruise.size(); ++k) {
-    Rng street = Rng::Stream(route_seed, Hash3(12, k, options.reverse ? 1 : 0));
+    Rng street = Rng::Stream(speed_seed, Hash3(12, k, options.reverse ? 1 : 0));
     cruise[k] = street.Uniform(cruise_lo, options.max_speed);
   }
   // In turns the car slows below the cruise speed as far as the yaw-rate and lateral-acceleration limits ask

@@ -6,6 +6,11 @@
 // cruise speed; the car accelerates and brakes at limited rates and takes the turns as slowly as a car's
 // yaw rate (40 deg/s) and lateral acceleration (4 m/s^2) limits ask, below the maxima of the KITTI drives
 // (see route.cc). Poses are sampled at the camera rate.
+//
+// With a route seed (RouteOptions::route_seed) the drive is instead one of a fleet's drives through the same
+// town (route_tour.h): it starts a block off the town's hub block, loops round the hub and round a block next
+// to it, then goes on with loops as above, away from the hub. Such drives share streets with each other both
+// ways.
 
 #include <cmath>
 #include <cstdint>
@@ -29,6 +34,9 @@ struct RouteOptions {
   double camera_height = 1.65;  // above the road
   bool reverse = false;         // drive the same streets in the opposite direction
   std::uint64_t seed = 0;       // 0: the city seed
+  // 0: the drive above (today's). Otherwise a fleet drive through the same town (route_tour.h); other values
+  // give other drives, with their own GPS and sensor noise (the town, its traffic and its origin stay).
+  std::uint64_t route_seed = 0;
   void Check() const;
 };
 

@@ -60,6 +60,8 @@ SynthOptions ReadSceneOptions(const std::filesystem::path& scene_json) {
   Get(o, "route", "camera_height", scene_json, &options.route.camera_height);
   Get(o, "route", "reverse", scene_json, &options.route.reverse);
   Get(o, "route", "seed", scene_json, &options.route.seed);
+  if (o.contains("route") && o["route"].is_object() && o["route"].contains("route_seed"))
+    Get(o, "route", "route_seed", scene_json, &options.route.route_seed);
   Get(o, "camera", "width", scene_json, &options.camera.width);
   Get(o, "camera", "height", scene_json, &options.camera.height);
   Get(o, "camera", "focal", scene_json, &options.camera.focal);

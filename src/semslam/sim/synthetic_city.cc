@@ -106,7 +106,12 @@ RenderedFrame SyntheticCity::Render(size_t frame, unsigned parts) const {
   Require(frame < num_frames(), "SyntheticCity::Render: frame out of range");
   RenderedFrame out;
   const Rigid3d& town_from_left = route_.town_from_camera[frame];
-  const auto seed32 = static_cast<std::uint32_t>(Mix64(options_.city.seed));
+  // A fleet drive has its own sensor noise; today's drive keeps the noise it has always had.
+  const std::uint64_t noise_seed =
+      options_.route.route_seed == 0
+          ? options_.city.seed
+          : HashCombine(options_.city.seed, Hash3(13, options_.route.route_seed, 2));
+  const auto seed32 = static_cast<std::uint32_t>(Mix64(noise_seed));
   const auto key = [&](std::uint32_t camera) {
     return Hash32(seed32, static_cast<std::uint32_t>(frame), camera);
   };
