@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 #include "semslam/topology/routing.h"
@@ -185,6 +186,116 @@ std::string ReadAll(const fs::path& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// A street of the Block's city through `enu` (metres).
+Street MakeStreet(const Georeference& g, const std::string& name, const std::vector<Eigen::Vector2d>& enu) {
+  Street s;
+  s.name = name;
+  s.highway = "residential";
+  for (const Eigen::Vector2d& p : enu)
+    s.polyline.push_back(g.enu_frame.ToWgs84(Eigen::Vector3d(p.x(), p.y(), 0)));
+  return s;
+}
+
+// The Block's streets, their centre lines 3 m off its path (a lane): South Street (y = 0), West Street
+// (x = 0), North Street (y = 100, east of x = 100) which is Parkside west of it; no street along x = 200. A
+// fountain at (100, 110) and the corner of Parkside and West Street as landmarks.
+struct StreetBlock : Block {
+  StreetBlock() {
+    landmarks.push_back(Placed(georeference, "Fountain", {100, 110}));
+    PlacedLandmark corner = Placed(georeference, "Parkside / West Street", {-3, 104});
+    corner.landmark.category = std::string(kCornerCategory);
+    landmarks.push_back(corner);
+    streets = {MakeStreet(georeference, "South Street", {{-50, -3}, {120, -3}, {250, -3}}),
+               MakeStreet(georeference, "West Street", {{3, -50}, {3, 150}}),
+               MakeStreet(georeference, "North Street", {{250, 103}, {100, 103}}),
+               MakeStreet(georeference, "Parkside", {{100, 103}, {-50, 103}})};
+    map = BuildTopologicalMap(keyframes, landmarks, georeference, {}, streets);
+  }
+  std::vector<Street> streets;
+
+  const TopoEdge& Edge(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+    const int na = NodeAt(a), nb = NodeAt(b);
+    for (const TopoEdge& e : map.edges) {
+      if ((e.from == na && e.to == nb) || (e.from == nb && e.to == na)) return e;
+    }
+    throw std::runtime_error("no such edge");
+  }
+};
+
+std::vector<std::string> StepTexts(const Route& route) {
+  std::vector<std::string> texts;
+  for (const RouteStep& s : route.steps) texts.push_back(s.text);
+  return texts;
+}
+
+TEST(TopologyStreets, EdgesNamedForTheStreetsTheyFollow) {
+  const StreetBlock b;
+  EXPECT_EQ(b.Edge({100, 0}, {0, 0}).street, "South Street");
+  EXPECT_EQ(b.Edge({0, 0}, {0, 100}).street, "West Street");
+  EXPECT_EQ(b.Edge({0, 100}, {60, 100}).street, "Parkside");
+  EXPECT_EQ(b.Edge({100, 100}, {200, 100}).street, "North Street");
+  EXPECT_EQ(b.Edge({200, 0}, {200, 100}).street, "");  // no street known there
+  // A street names a polyline when it is within reach of more than half of it: 75 of 121 samples (the last
+  // 60 m along South Street, and round the corner), but 35 of 81 not.
+  const std::vector<TopoStreet> enu = StreetsToEnu(b.streets, b.georeference.enu_frame);
+  EXPECT_EQ(StreetAlong({{60, 0, 1.5}, {200, 0, 1.5}, {200, 100, 1.5}}, enu, 10.0), "South Street");
+  EXPECT_EQ(StreetAlong({{140, 0, 1.5}, {200, 0, 1.5}, {200, 100, 1.5}}, enu, 10.0), "");
+  EXPECT_EQ(StreetAlong({{60, 0, 1.5}, {150, 0, 1.5}}, enu, 2.0), "");  // the street is 3 m off
+  EXPECT_EQ(StreetAlong({{0, 0, 0}, {100, 0, 0}}, {}, 10.0), "");
+}
+
+TEST(TopologyStreets, RoutesNameTheStreets) {
+  const StreetBlock b;
+  EXPECT_THAT(StepTexts(FindRoute(b.map, "Bakery", "School")),
+              ::testing::ElementsAre(
+                  "Start at Bakery, heading west.", "Drive 100 m along South Street.",
+                  "Turn right into West Street.", "Drive 100 m along West Street to Parkside / West Street.",
+                  "Turn right into Parkside.", "Drive 60 m along Parkside to School (on your left).",
+                  "You have arrived at School (260 m in all)."));
+  // Straight on where the street changes its name; unknown streets are not named.
+  EXPECT_THAT(StepTexts(FindRoute(b.map, "School", "Church")),
+              ::testing::ElementsAre("Start at School, heading east.",
+                                     "Drive 40 m along Parkside to Fountain (on your left).",
+                                     "Continue straight into North Street.",
+                                     "Drive 100 m along North Street to Church (on your left).",
+                                     "You have arrived at Church (140 m in all)."));
+  EXPECT_THAT(StepTexts(FindRoute(b.map, "Church", "Bakery")),
+              ::testing::ElementsAre("Start at Church, heading south.", "Drive 100 m.",
+                                     "Turn right into South Street.",
+                                     "Drive 100 m along South Street to Bakery (on your left).",
+                                     "You have arrived at Bakery (200 m in all)."));
+
+  // Written and read back; a file written before edges had streets reads with none.
+  TempDir dir;
+  WriteTopologyFiles(dir.path(), b.map);
+  const TopologicalMap back = ReadTopologyJson(dir / "topology.json");
+  ASSERT_EQ(back.edges.size(), b.map.edges.size());
+  for (size_t i = 0; i < back.edges.size(); ++i) EXPECT_EQ(back.edges[i].street, b.map.edges[i].street);
+  EXPECT_EQ(StepTexts(FindRoute(back, "School", "Church")), StepTexts(FindRoute(b.map, "School", "Church")));
+  nlohmann::json old = nlohmann::json::parse(TopologyJsonString(b.map));
+  for (auto& e : old["edges"]) e.erase("street");
+  old["options"].erase("street_max_distance_m");
+  const TopologicalMap without = ParseTopologyJson(old.dump(), "old.json");
+  for (const TopoEdge& e : without.edges) EXPECT_EQ(e.street, "");
+  EXPECT_THAT(StepTexts(FindRoute(without, "Church", "Bakery")),
+              ::testing::ElementsAre("Start at Church, heading south.", "Drive 100 m.", "Turn right.",
+                                     "Drive 100 m to Bakery (on your left).",
+                                     "You have arrived at Bakery (200 m in all)."));
+  old["edges"][0]["street"] = 7;
+  EXPECT_THROW(ParseTopologyJson(old.dump(), "old.json"), InputError);
+
+  const nlohmann::json geojson = nlohmann::json::parse(ReadAll(dir / "topology.geojson"));
+  std::set<std::string> streets;
+  for (const auto& f : geojson["features"]) {
+    if (f["properties"]["feature"] == "edge") streets.insert(f["properties"]["street"].get<std::string>());
+  }
+  EXPECT_EQ(streets, (std::set<std::string>{"", "North Street", "Parkside", "South Street", "West Street"}));
+  const std::string graphml = ReadAll(dir / "topology.graphml");
+  EXPECT_THAT(graphml, HasSubstr("attr.name=\"street\""));
+  EXPECT_THAT(graphml, HasSubstr(">West Street<"));
+  EXPECT_THAT(ReadAll(dir / "topology.dot"), HasSubstr("West Street, 100 m"));
 }
 
 TEST(TopologyFiles, WrittenAndReadBack) {

@@ -245,7 +245,8 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
     out.files.push_back(out_dir / "trajectory_wgs84.csv");
     summary.trajectory_frames = static_cast<int>(trajectory.size());
 
-    // 3. Landmarks.
+    // 3. Landmarks (and an OpenStreetMap catalogue's streets, which name the topology's edges).
+    std::vector<Street> streets;
     if (inputs.landmarks || !inputs.landmarks_path.empty()) {
       OsmLandmarkOptions osm;
       osm.radius_m = options.osm_radius_m;
@@ -255,6 +256,7 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
                                         : IsOsmCatalogue(inputs.landmarks_path)
                                             ? KeepNearTrajectory(*inputs.landmarks, osm)
                                             : *inputs.landmarks;
+      if (IsOsmCatalogue(inputs.landmarks_path)) streets = ReadStreetsOsm(inputs.landmarks_path, osm);
       MakeLandmarkNamesUnique(catalogue);
       out.landmarks = PlaceLandmarks(catalogue, g, keyframe_positions, options.landmarks);
       WriteLandmarksGeoJson(out_dir / "landmarks.geojson", out.landmarks, keyframe_positions,
@@ -267,7 +269,7 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
     }
 
     // 4. The topological map.
-    out.topology = BuildTopologicalMap(keyframe_positions, out.landmarks, g, options.topology);
+    out.topology = BuildTopologicalMap(keyframe_positions, out.landmarks, g, options.topology, streets);
     WriteTopologyFiles(out_dir, *out.topology);
     for (const char* name : {"topology.geojson", "topology.graphml", "topology.dot", "topology.json"}) {
       out.files.push_back(out_dir / name);

@@ -6,6 +6,7 @@
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/dijkstra_shortest_paths.hpp>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 
@@ -156,7 +157,24 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
     const TopoNode& n = map.nodes[static_cast<size_t>(node)];
     if (landmark < 0 && n.landmarks.empty()) return {};
     if (landmark < 0) landmark = n.landmarks.front();
-    return Side(n.enu, direction, map.landmarks[static_cast<size_t>(landmark)].enu);
+    const TopoLandmark& l = map.landmarks[static_cast<size_t>(landmark)];
+    if (l.category == kCornerCategory) return {};  // a corner is where the road goes, not beside it
+    return Side(n.enu, direction, l.enu);
+  };
+  // The street of the route's i-th edge (from node i to node i + 1); empty when not known.
+  const auto street = [&](size_t i) -> const std::string& {
+    return map.edges[static_cast<size_t>(route.edges[i])].street;
+  };
+  // " along S" for the drive over edges [first, last): S covers more than half of its length.
+  const auto along = [&](size_t first, size_t last) -> std::string {
+    std::map<std::string, double> length;
+    for (size_t i = first; i < last; ++i) {
+      if (!street(i).empty()) length[street(i)] += node_arc[i + 1] - node_arc[i];
+    }
+    for (const auto& [name, l] : length) {
+      if (2.0 * l > node_arc[last] - node_arc[first]) return " along " + name;
+    }
+    return {};
   };
 
   const int first = route.nodes.front(), last = route.nodes.back();
@@ -172,6 +190,7 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
   steps.push_back(start);
 
   double pending = 0.0;
+  size_t drive_start = 0;  // the node the current drive began at
   for (size_t i = 1; i < route.nodes.size(); ++i) {
     pending += node_arc[i] - node_arc[i - 1];
     const int node = route.nodes[i];
@@ -179,8 +198,8 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
         i + 1 == route.nodes.size() ? endpoint_name(route.to_landmark, node) : NodeNames(map, node);
     if (i + 1 == route.nodes.size()) {
       steps.push_back({RouteStep::Kind::kDrive, pending, TurnDirection::kStraight, node,
-                       fmt::format("Drive {} to {}{}.", FormatDistance(pending), names,
-                                   landmark_side(node, direction_before(i), route.to_landmark))});
+                       fmt::format("Drive {}{} to {}{}.", FormatDistance(pending), along(drive_start, i),
+                                   names, landmark_side(node, direction_before(i), route.to_landmark))});
       break;
     }
     const Eigen::Vector2d before = direction_before(i), after = direction_after(i);
@@ -190,16 +209,27 @@ std::vector<RouteStep> DescribeRoute(const TopologicalMap& map, const Route& rou
                   std::numbers::pi
             : 0.0;
     const TurnDirection turn = ClassifyTurn(angle, map.options.straight_below_deg);
-    if (turn == TurnDirection::kStraight && names.empty()) continue;  // keep driving
+    // Where the street ahead is known and another than the one behind, the step names it.
+    const std::string& next_street = street(i);
+    const bool new_street = !next_street.empty() && next_street != street(i - 1);
+    // Keep driving straight on, unless at a named place or into a street of another name.
+    if (turn == TurnDirection::kStraight && names.empty() && !(new_street && !street(i - 1).empty()))
+      continue;
+    const std::string way = along(drive_start, i);
     steps.push_back({RouteStep::Kind::kDrive, pending, TurnDirection::kStraight, node,
-                     names.empty() ? fmt::format("Drive {}.", FormatDistance(pending))
-                                   : fmt::format("Drive {} to {}{}.", FormatDistance(pending), names,
+                     names.empty() ? fmt::format("Drive {}{}.", FormatDistance(pending), way)
+                                   : fmt::format("Drive {}{} to {}{}.", FormatDistance(pending), way, names,
                                                  landmark_side(node, before))});
     pending = 0.0;
-    if (turn != TurnDirection::kStraight) {
+    drive_start = i;
+    const std::string into = new_street ? " into " + next_street : std::string();
+    if (turn == TurnDirection::kUTurn) {
+      steps.push_back({RouteStep::Kind::kTurn, 0.0, turn, node, "Turn around."});
+    } else if (turn != TurnDirection::kStraight) {
       steps.push_back({RouteStep::Kind::kTurn, 0.0, turn, node,
-                       turn == TurnDirection::kUTurn ? std::string("Turn around.")
-                                                     : fmt::format("Turn {}.", TurnDirectionName(turn))});
+                       fmt::format("Turn {}{}.", TurnDirectionName(turn), into)});
+    } else if (new_street) {
+      steps.push_back({RouteStep::Kind::kTurn, 0.0, turn, node, fmt::format("Continue straight{}.", into)});
     }
   }
   RouteStep arrive;

@@ -136,6 +136,8 @@ void TopologyOptions::Check() const {
   Require(landmark_max_distance_m > 0, "topology landmark_max_distance_m must be positive");
   Require(straight_below_deg > 0 && straight_below_deg < 150,
           "topology straight_below_deg must be in (0, 150)");
+  Require(std::isfinite(street_max_distance_m) && street_max_distance_m > 0,
+          "topology street_max_distance_m must be positive");
 }
 
 std::optional<int> TopologicalMap::FindLandmark(std::string_view name) const {
@@ -186,7 +188,8 @@ int TopologicalMap::CyclomaticNumber() const {
 
 TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
                                    const std::vector<PlacedLandmark>& landmarks,
-                                   const Georeference& georeference, const TopologyOptions& options) {
+                                   const Georeference& georeference, const TopologyOptions& options,
+                                   const std::vector<Street>& streets) {
   options.Check();
   TopologicalMap map(georeference);
   map.options = options;
@@ -353,6 +356,9 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
       if (e.from != a.node) std::reverse(e.polyline_enu.begin(), e.polyline_enu.end());
     }
   }
+
+  // 4. Streets.
+  if (!streets.empty()) LabelEdgeStreets(map, StreetsToEnu(streets, georeference.enu_frame));
   return map;
 }
 

@@ -13,6 +13,10 @@
 //  3. Visits: every pass of the trajectory within `fuse_distance_m` of a node (closest point of the pass,
 //     on the keyframe polyline) is a visit of it; edges join consecutive visits along the trajectory, with
 //     the arc length between them; a pair of nodes joined on several passes keeps its shortest edge.
+//  4. Streets (when given, e.g. from OpenStreetMap): each edge is labelled with the street it follows, the
+//  one
+//     whose polyline lies within `street_max_distance_m` of more than half of the edge's polyline (sampled
+//     every 2 m); the most covering one when several do; none when no street does.
 // Edges are traversable both ways (a person walks back; streets are taken as two-way).
 
 #include <optional>
@@ -38,6 +42,9 @@ struct TopologyOptions {
   double landmark_max_distance_m = 100.0;
   // Routing: a heading change below this at a node is "straight on".
   double straight_below_deg = 30.0;
+  // An edge runs along a street where it is within this of the street's centreline: half a wide street's
+  // carriageway (a lane is 3-4 m from the centre line) plus the georeference's and the map's errors.
+  double street_max_distance_m = 10.0;
 
   void Check() const;
 };
@@ -69,6 +76,7 @@ struct TopoEdge {
   double length_m = 0.0;
   Points3d polyline_enu;  // from -> to, along the trajectory
   int traversals = 1;     // passes along it (either direction)
+  std::string street;     // the street it follows (step 4); empty: not known
 };
 
 struct TopoLandmark {
@@ -109,16 +117,32 @@ struct TopologicalMap {
   int CyclomaticNumber() const;
 };
 
-// `keyframes` in trajectory order; `landmarks` from PlaceLandmarks with the same georeference.
+// `keyframes` in trajectory order; `landmarks` from PlaceLandmarks with the same georeference; `streets`
+// (WGS84, e.g. ReadStreetsOsm) name the edges, converted to ENU through the georeference.
 TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
                                    const std::vector<PlacedLandmark>& landmarks,
-                                   const Georeference& georeference, const TopologyOptions& options = {});
+                                   const Georeference& georeference, const TopologyOptions& options = {},
+                                   const std::vector<Street>& streets = {});
+
+// ---- Streets (topology_streets.cc) ----
+
+struct TopoStreet {
+  std::string name;
+  Points3d polyline_enu;
+};
+std::vector<TopoStreet> StreetsToEnu(const std::vector<Street>& streets, const EnuFrame& frame);
+// The street `polyline` (ENU) follows, by step 4 above; empty when none.
+std::string StreetAlong(const Points3d& polyline, const std::vector<TopoStreet>& streets,
+                        double max_distance_m);
+// Sets every edge's `street`.
+void LabelEdgeStreets(TopologicalMap& map, const std::vector<TopoStreet>& streets);
 
 // ---- Output and input (topology_io.cc) ----
 
 // FeatureCollection: nodes as Points and edges as LineStrings, in WGS84.
 void WriteTopologyGeoJson(const std::filesystem::path& path, const TopologicalMap& map);
-// GraphML (Boost.Graph): node attributes kind, name, turn, lat, lon, east, north, passes; edge length_m.
+// GraphML (Boost.Graph): node attributes kind, name, turn, lat, lon, east, north, passes; edge length_m,
+// traversals, street.
 void WriteTopologyGraphml(const std::filesystem::path& path, const TopologicalMap& map);
 // Graphviz DOT (Boost.Graph), with node positions in metres (neato -n).
 void WriteTopologyDot(const std::filesystem::path& path, const TopologicalMap& map);

@@ -142,7 +142,8 @@ std::string TopologyJsonString(const TopologicalMap& map) {
                      {"fuse_distance_m", o.fuse_distance_m},
                      {"landmark_max_distance_m",
                       std::isfinite(o.landmark_max_distance_m) ? o.landmark_max_distance_m : 1e300},
-                     {"straight_below_deg", o.straight_below_deg}};
+                     {"straight_below_deg", o.straight_below_deg},
+                     {"street_max_distance_m", o.street_max_distance_m}};
   json landmarks = json::array();
   for (const TopoLandmark& l : map.landmarks) {
     landmarks.push_back({{"name", l.name},
@@ -188,6 +189,7 @@ std::string TopologyJsonString(const TopologicalMap& map) {
                      {"to", e.to},
                      {"length_m", e.length_m},
                      {"traversals", e.traversals},
+                     {"street", e.street},
                      {"polyline_enu", polyline}});
   }
   root["edges"] = edges;
@@ -262,6 +264,8 @@ TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) 
   map.options.fuse_distance_m = r.Number(o, "fuse_distance_m", "options");
   map.options.landmark_max_distance_m = r.Number(o, "landmark_max_distance_m", "options");
   map.options.straight_below_deg = r.Number(o, "straight_below_deg", "options");
+  if (o.contains("street_max_distance_m"))  // not in files written before edges named streets
+    map.options.street_max_distance_m = r.Number(o, "street_max_distance_m", "options");
   try {
     map.options.Check();
   } catch (const InvalidArgument& e) {
@@ -347,6 +351,7 @@ TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) 
     e.length_m = r.Number(j, "length_m", p);
     if (e.length_m < 0) r.Fail(p + ".length_m", "must not be negative");
     e.traversals = static_cast<int>(r.Integer(j, "traversals", p));
+    if (j.contains("street")) e.street = r.String(j, "street", p);  // optional: older files have none
     const json& line = r.Array(j, "polyline_enu", p);
     if (line.size() < 2) r.Fail(p + ".polyline_enu", "needs at least 2 points");
     for (size_t k = 0; k < line.size(); ++k)
@@ -398,7 +403,8 @@ void WriteTopologyGeoJson(const fs::path& path, const TopologicalMap& map) {
                           {"from", e.from},
                           {"to", e.to},
                           {"length_m", e.length_m},
-                          {"traversals", e.traversals}}}});
+                          {"traversals", e.traversals},
+                          {"street", e.street}}}});
   }
   for (const TopoLandmark& l : map.landmarks) {
     features.push_back({{"type", "Feature"},
@@ -423,7 +429,7 @@ struct VertexProperties {
 struct EdgeProperties {
   double length_m = 0;
   int traversals = 0;
-  std::string label;
+  std::string street, label;
 };
 using OutputGraph =
     boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS, VertexProperties, EdgeProperties>;
@@ -445,7 +451,10 @@ OutputGraph MakeOutputGraph(const TopologicalMap& map) {
   }
   for (const TopoEdge& e : map.edges) {
     boost::add_edge(static_cast<size_t>(e.from), static_cast<size_t>(e.to),
-                    EdgeProperties{e.length_m, e.traversals, fmt::format("{:.0f} m", e.length_m)}, g);
+                    EdgeProperties{e.length_m, e.traversals, e.street,
+                                   e.street.empty() ? fmt::format("{:.0f} m", e.length_m)
+                                                    : fmt::format("{}, {:.0f} m", e.street, e.length_m)},
+                    g);
   }
   return g;
 }
@@ -465,6 +474,7 @@ void WriteTopologyGraphml(const fs::path& path, const TopologicalMap& map) {
   dp.property("passes", boost::get(&VertexProperties::passes, g));
   dp.property("length_m", boost::get(&EdgeProperties::length_m, g));
   dp.property("traversals", boost::get(&EdgeProperties::traversals, g));
+  dp.property("street", boost::get(&EdgeProperties::street, g));
   std::ostringstream out;
   out.precision(10);
   boost::write_graphml(out, g, dp, true);
