@@ -19,6 +19,7 @@
 
 #include "semslam/core/timing.h"
 #include "semslam/geometry/sim3.h"
+#include "semslam/map/by_id.h"
 #include "semslam/map/map.h"
 
 namespace semslam {
@@ -154,10 +155,11 @@ class LoopCloser {
   // event's scale.
   double MoveMapToMatchedFrame(KeyFrame* current);
   void CorrectLoop(KeyFrame* current);
-  void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
-                              const std::map<KeyFrame*, Sim3d>& non_corrected,
-                              const std::map<KeyFrame*, Sim3d>& corrected,
-                              const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections);
+  // By keyframe id: the order the correction moves points, fuses duplicates and adds graph edges in.
+  using PosesById = std::map<KeyFrame*, Sim3d, ById>;
+  using LinksById = std::map<KeyFrame*, std::set<KeyFrame*, ById>, ById>;
+  void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current, const PosesById& non_corrected,
+                              const PosesById& corrected, const LinksById& loop_connections);
   void RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id);
   void StopGlobalBundleAdjustment();
 
