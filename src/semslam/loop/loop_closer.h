@@ -85,6 +85,9 @@ struct LoopCloserOptions {
   double max_mono_loop_rotation_deg = 30.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
+  // Run that BA at a lower priority than tracking and local mapping. SlamSystem clears it at synchronous
+  // pacing, where tracking waits for the BA: there it would only yield to other processes.
+  bool global_ba_low_priority = true;
   int global_ba_iterations = 10;
   // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map is
   // adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).

@@ -276,7 +276,7 @@ void LoopCloser::StopGlobalBundleAdjustment() {
 void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
   // It may take many seconds; on a machine with fewer cores than the pipeline has threads it would otherwise
   // slow the local mapper while the drive goes on into places no loop will correct.
-  LowerCurrentThreadPriority(kGlobalBundleAdjustmentNiceness);
+  if (options_.global_ba_low_priority) LowerCurrentThreadPriority(kGlobalBundleAdjustmentNiceness);
   ScopedTimer timer(timing_, "global_ba");
   spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
   GlobalBundleAdjustmentOptions options;
