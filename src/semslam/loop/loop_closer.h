@@ -19,6 +19,7 @@
 
 #include "semslam/core/timing.h"
 #include "semslam/geometry/sim3.h"
+#include "semslam/map/by_id.h"
 #include "semslam/map/map.h"
 
 namespace semslam {
@@ -84,6 +85,9 @@ struct LoopCloserOptions {
   double max_mono_loop_rotation_deg = 30.0;
   bool merge_maps = true;  // merge maps of the atlas when a place of another one is recognized
   bool global_ba = true;
+  // Run that BA at a lower priority than tracking and local mapping. SlamSystem clears it at synchronous
+  // pacing, where tracking waits for the BA: there it would only yield to other processes.
+  bool global_ba_low_priority = true;
   int global_ba_iterations = 10;
   // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map is
   // adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).
@@ -154,10 +158,11 @@ class LoopCloser {
   // event's scale.
   double MoveMapToMatchedFrame(KeyFrame* current);
   void CorrectLoop(KeyFrame* current);
-  void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
-                              const std::map<KeyFrame*, Sim3d>& non_corrected,
-                              const std::map<KeyFrame*, Sim3d>& corrected,
-                              const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections);
+  // By keyframe id: the order the correction moves points, fuses duplicates and adds graph edges in.
+  using PosesById = std::map<KeyFrame*, Sim3d, ById>;
+  using LinksById = std::map<KeyFrame*, std::set<KeyFrame*, ById>, ById>;
+  void OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current, const PosesById& non_corrected,
+                              const PosesById& corrected, const LinksById& loop_connections);
   void RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id);
   void StopGlobalBundleAdjustment();
 

@@ -77,8 +77,8 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
   event.map_id = current->map_id();
   event.matched_map_id = matched_keyframe_->map_id();
 
-  std::map<KeyFrame*, std::set<KeyFrame*>> loop_connections;
-  std::map<KeyFrame*, Sim3d> corrected, non_corrected;
+  LinksById loop_connections;
+  PosesById corrected, non_corrected;
   {
     auto lock = map_.WriteLock();
     if (merge) {
@@ -151,7 +151,7 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
     for (KeyFrame* kf : connected) {
       const std::vector<KeyFrame*> before = kf->Covisibles();
       kf->UpdateConnections();
-      std::set<KeyFrame*> links(kf->Covisibles().begin(), kf->Covisibles().end());
+      std::set<KeyFrame*, ById> links(kf->Covisibles().begin(), kf->Covisibles().end());
       for (KeyFrame* b : before) links.erase(b);
       for (KeyFrame* c : connected) links.erase(c);
       loop_connections[kf] = links;
@@ -177,9 +177,8 @@ void LoopCloser::CorrectLoop(KeyFrame* current) {
 }
 
 void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* current,
-                                        const std::map<KeyFrame*, Sim3d>& non_corrected,
-                                        const std::map<KeyFrame*, Sim3d>& corrected,
-                                        const std::map<KeyFrame*, std::set<KeyFrame*>>& loop_connections) {
+                                        const PosesById& non_corrected, const PosesById& corrected,
+                                        const LinksById& loop_connections) {
   ScopedTimer timer(timing_, "essential_graph");
   constexpr int kMinWeight = 100;
   const std::vector<KeyFrame*> keyframes = map_.KeyFramesOfMap(current->map_id());
@@ -277,7 +276,7 @@ void LoopCloser::StopGlobalBundleAdjustment() {
 void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::uint32_t map_id) {
   // It may take many seconds; on a machine with fewer cores than the pipeline has threads it would otherwise
   // slow the local mapper while the drive goes on into places no loop will correct.
-  LowerCurrentThreadPriority(kGlobalBundleAdjustmentNiceness);
+  if (options_.global_ba_low_priority) LowerCurrentThreadPriority(kGlobalBundleAdjustmentNiceness);
   ScopedTimer timer(timing_, "global_ba");
   spdlog::info("global bundle adjustment of map {} after the loop at keyframe {}", map_id, loop_keyframe_id);
   GlobalBundleAdjustmentOptions options;

@@ -66,7 +66,7 @@ void LocalMapper::InsertKeyFrame(KeyFrame* keyframe) {
     std::lock_guard lock(queue_mutex_);
     queue_.push_back(keyframe);
   }
-  abort_ba_ = true;
+  if (options_.yield_to_new_keyframes) abort_ba_ = true;
   queue_cv_.notify_all();
 }
 
@@ -167,9 +167,9 @@ void LocalMapper::Run() {
       ProcessNewKeyFrame();
       CullRecentPoints();
       CreateNewMapPoints();
-      if (!HasNewKeyFrames()) SearchInNeighbours();
+      if (!NewerKeyFramesWaiting()) SearchInNeighbours();
       abort_ba_ = false;
-      if (!HasNewKeyFrames() && !StopRequested()) {
+      if (!NewerKeyFramesWaiting() && !StopRequested()) {
         LocalBundleAdjustment();
         CullKeyFrames();
       }
@@ -305,7 +305,7 @@ void LocalMapper::CreateNewMapPoints() {
     const double max_cos_parallax = std::cos(options_.min_parallax_deg * M_PI / 180.0);
 
     for (size_t n = 0; n < neighbours.size(); ++n) {
-      if (n > 0 && HasNewKeyFrames()) break;
+      if (n > 0 && NewerKeyFramesWaiting()) break;
       const KeyFrame& kf2 = *neighbours[n];
       const FrameData& d2 = kf2.data();
       const Eigen::Vector3d c2 = kf2.center();

@@ -31,6 +31,10 @@ struct LocalMapperOptions {
   double min_parallax_deg = 1.15;  // monocular triangulation: rays closer than this give no new point
   // No new points from keypoints a segmentation labeled as moving classes.
   bool exclude_dynamic = false;  // first pass; a second pass of twice as many follows without outliers
+  // Cut a keyframe's work short (triangulation with further neighbours, fusion, local BA) when newer
+  // keyframes wait, and abort a local BA when one arrives. SlamSystem clears it at synchronous pacing, where
+  // what the mapper does with a keyframe must not depend on when the next one was queued.
+  bool yield_to_new_keyframes = true;
 
   void Check() const;
 };
@@ -82,6 +86,8 @@ class LocalMapper {
  private:
   void Run();
   bool HasNewKeyFrames() const;
+  // Whether to cut the current keyframe's work short for newer ones (options_.yield_to_new_keyframes).
+  bool NewerKeyFramesWaiting() const { return options_.yield_to_new_keyframes && HasNewKeyFrames(); }
   void ProcessNewKeyFrame();
   void CullRecentPoints();
   void CreateNewMapPoints();

@@ -132,6 +132,8 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,
   options_.tracker.localization_only = options_.localization_only;
   options_.tracker.exclude_dynamic = options_.exclude_dynamic;
   options_.mapper.exclude_dynamic = options_.exclude_dynamic;
+  options_.mapper.yield_to_new_keyframes = options_.pacing != Pacing::kSynchronous;
+  options_.loop.global_ba_low_priority = options_.pacing != Pacing::kSynchronous;
   options_.Check();
   Require(options_.mode == SensorMode::kMonocular || stereo_.has_value(),
           "stereo mode needs a sequence with a right camera and a baseline");
@@ -287,40 +289,67 @@ TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp
   }
   TrackingResult result = tracker_->Track(frame_id, timestamp, left, right, mask);
   ++frames_;
-  if (segmentation_) SubmitForSegmentation(frame_id, color.empty() ? left : color, result);
   if (result.state == TrackingState::kOk) ++tracked_;
-  if (result.reset_requested) DiscardActiveMap();
+  const cv::Mat& segmented_image = color.empty() ? left : color;
   if (options_.pacing == Pacing::kSynchronous) {
-    if (result.new_keyframe || result.initialized_now) mapper_->WaitUntilIdle();
-    // A loop correction or map merge holding the mapper is waited out too, so that a drive played this way
-    // sees corrections as instant. Going on, tracking could add no keyframe while the mapper was held and
-    // drove off its points (seed 8888's merge after a black-out: two frames lost).
-    if (mapper_->StopRequested()) {
-      ScopedTimer timer(timing_, "waiting_for_correction");
-      mapper_->WaitWhilePaused();
-    }
-  } else if (options_.max_queued_keyframes > 0 && result.new_keyframe && !options_.localization_only) {
+    WaitForMappingAndLoopClosing(result);
+    if (result.reset_requested) DiscardActiveMap();
+    if (segmentation_) SubmitForSegmentation(frame_id, segmented_image, result);
+    return result;
+  }
+  if (segmentation_) SubmitForSegmentation(frame_id, segmented_image, result);
+  if (result.reset_requested) DiscardActiveMap();
+  if (options_.max_queued_keyframes > 0 && result.new_keyframe && !options_.localization_only) {
     ScopedTimer timer(timing_, "waiting_for_mapping");
     mapper_->WaitForQueueAtMost(static_cast<size_t>(options_.max_queued_keyframes));
   }
   return result;
 }
 
+void SlamSystem::WaitForMappingAndLoopClosing(const TrackingResult& result) {
+  if (options_.localization_only) return;
+  // The loop closer takes each keyframe once the mapper is done with it; it, a correction or merge it makes
+  // (which holds the mapper) and the global BA it then starts are waited for too, so that a drive played
+  // this way sees them as instant and the next frame always meets the map they leave. Going on during a
+  // correction, tracking could add no keyframe while the mapper was held and drove off its points (seed
+  // 8888's merge after a black-out: two frames lost); during a global BA, what tracking met depended on how
+  // far the BA had come. Only keyframes give the two threads work.
+  if (result.new_keyframe || result.initialized_now || !result.new_keyframes.empty()) {
+    {
+      ScopedTimer timer(timing_, "waiting_for_keyframe_mapping");
+      mapper_->WaitUntilIdle();
+    }
+    ScopedTimer timer(timing_, "waiting_for_loop_closing");
+    loop_closer_->WaitUntilIdle();
+  }
+  mapper_->WaitWhilePaused();  // returns at once when nothing holds it
+}
+
 void SlamSystem::SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left,
                                        const TrackingResult& result) {
+  // Synchronous pacing: every request is segmented and fused before the next one and before the next frame,
+  // so that the labels fused, and the order they are summed in, never depend on the worker's speed.
+  const bool synchronous = options_.pacing == Pacing::kSynchronous;
+  auto submit = [&](std::uint64_t request, const cv::Mat& image, std::uint64_t frame) {
+    segmentation_->Submit(request, image, static_cast<std::int64_t>(frame));
+    if (synchronous) {
+      ScopedTimer timer(timing_, "waiting_for_segmentation");
+      segmentation_->WaitUntilIdle();
+    }
+  };
   recent_images_.emplace_back(frame_id, left);
   while (recent_images_.size() > kRecentImages) recent_images_.pop_front();
   if (!result.new_keyframes.empty()) {
     for (const NewKeyFrame& created : result.new_keyframes) {
       for (const auto& [id, image] : recent_images_) {
-        if (id == created.frame_id)
-          segmentation_->Submit(created.keyframe_id, image, static_cast<std::int64_t>(id));
+        if (id == created.frame_id) submit(created.keyframe_id, image, id);
       }
     }
     return;
   }
   // Keyframes come first; an idle worker also takes the other tracked frames (a fast segmenter then sees
-  // every point many more times than the few keyframes that keep it).
+  // every point many more times than the few keyframes that keep it). At synchronous pacing the worker is
+  // always idle here: every tracked frame is segmented.
   const Frame* frame = tracker_->last_frame();
   if (result.state != TrackingState::kOk || frame == nullptr || segmentation_->Busy()) return;
   FrameObservations observations;
@@ -335,7 +364,7 @@ void SlamSystem::SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& le
     std::lock_guard pending(pending_frames_mutex_);
     pending_frames_[request] = std::move(observations);
   }
-  segmentation_->Submit(request, left, static_cast<std::int64_t>(frame_id));
+  submit(request, left, frame_id);
 }
 
 void SlamSystem::DiscardActiveMap() {

@@ -35,9 +35,11 @@ class KeyFrameDatabase;
 
 enum class SensorMode { kMonocular, kStereo };
 
-// How frames are fed: as fast as possible, at the camera's rate (timestamps), or waiting for the mapper
-// after every keyframe and while a loop correction or merge holds it (reproducible results for tests and
-// evaluation).
+// How frames are fed: as fast as possible, at the camera's rate (timestamps), or synchronously: after every
+// keyframe, waiting for the mapper and then the loop closer (a loop correction or merge and the global BA
+// after it), and for the segmentation of every keyframe and tracked frame. Synchronous runs are reproducible:
+// the same input, options and build give the same outputs, bit for bit, however busy the machine (for tests
+// and evaluation).
 enum class Pacing { kFast, kRealtime, kSynchronous };
 
 // "mono"/"stereo" and "fast"/"realtime"/"synchronous", as on the command line and in config files;
@@ -141,7 +143,9 @@ class SlamSystem {
 
   // Segments keyframes with `segmenter` on a worker thread of its own (tracking never waits for it; when it
   // falls behind it takes the newest keyframe) and fuses each result into the map (paper §III-B): the points
-  // the keyframe sees now, and those that gain an observation in it later. Call before the first frame.
+  // the keyframe sees now, and those that gain an observation in it later. At synchronous pacing every
+  // keyframe and tracked frame is segmented and fused, in frame order, before the next frame. Call before the
+  // first frame.
   void EnableSegmentation(std::shared_ptr<Segmenter> segmenter);
   std::optional<SegmentationWorkerStats> SegmentationStats() const;
   // The final bundle adjustment's self-calibration, one entry per monocular map it ran on (after Finish).
@@ -193,6 +197,9 @@ class SlamSystem {
  private:
   // Lost right after a map started: that map is given up (the others stay) and a new one starts.
   void DiscardActiveMap();
+  // Synchronous pacing, after a frame: until the mapper has processed the keyframes it made and the loop
+  // closer has acted on them (a loop's correction and global BA included).
+  void WaitForMappingAndLoopClosing(const TrackingResult& result);
   void OnSegmentation(SegmentationResult&& result);
   void SubmitForSegmentation(std::uint64_t frame_id, const cv::Mat& left, const TrackingResult& result);
   // The camera of maps this session makes: the loaded map's whose camera it tracks with, or the sequence's.
