@@ -232,6 +232,8 @@ def markdown(results, known_limits=""):
     add("- Command: `%s`" % results.get("command", "scripts/benchmark.sh"))
     add("- Commit: `%s`%s, %s" % (sha, " (with uncommitted changes)" if commit.get("dirty") else "",
                                   results.get("date", "")))
+    if results.get("binary_version"):
+        add("- Binary: `%s`" % results["binary_version"])
     add("- Machine: %s cores, %s, %s GiB memory; the benchmark took %s" % (
         machine.get("nproc", "?"), machine.get("cpu", "?"), machine.get("memory_gib", "?"),
         duration_text(results.get("seconds", 0))))
