@@ -332,6 +332,11 @@ def kitti00_geo(ctx, prepared, run_dir):
 LOCALIZE_FRAMES = "1550:1700"
 
 
+def share_pct(value):
+    """A demo.json share (0..1) in percent; its -1 (not measured) as no figure."""
+    return None if value is None or value < 0 else 100.0 * value
+
+
 def demo_case(frames, second_drive, est_seconds, variants):
     def prepare(ctx):
         return {}
@@ -347,8 +352,8 @@ def demo_case(frames, second_drive, est_seconds, variants):
         demo = read_json(os.path.join(run_dir, "demo.json"))
         out = slam_figures(os.path.join(run_dir, "run"))
         out.update({"wall_s": wall,
-                    "localized_within_1m_pct": 100.0 * demo["localized_within_1m"],
-                    "nearest_landmark_right_pct": 100.0 * demo["nearest_landmark_right"],
+                    "localized_within_1m_pct": share_pct(demo.get("localized_within_1m")),
+                    "nearest_landmark_right_pct": share_pct(demo.get("nearest_landmark_right")),
                     "report": 1 if os.path.exists(os.path.join(run_dir, "run", "report.html")) else 0})
         return out
 
