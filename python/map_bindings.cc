@@ -16,18 +16,19 @@ namespace semslam::python {
 namespace {
 
 struct LoadedMap {
-  py::array_t<double> points;          // N x 3, map frame
-  py::array_t<std::int32_t> labels;    // N, Cityscapes trainId, -1 unlabeled
-  py::array_t<float> confidence;       // N, posterior of the label
+  py::array_t<double> points;              // N x 3, map frame
+  py::array_t<std::int32_t> labels;        // N, Cityscapes trainId, -1 unlabeled
+  py::array_t<float> confidence;           // N, posterior of the label
   py::array_t<std::int32_t> observations;  // N, segmentations fused
-  py::array_t<double> keyframe_poses;  // K x 4 x 4 world_from_camera
+  py::array_t<double> keyframe_poses;      // K x 4 x 4 world_from_camera
   py::array_t<std::int64_t> keyframe_ids, keyframe_frames;
   py::array_t<double> keyframe_timestamps;
-  py::list landmarks;      // dicts from the "geo" section
-  py::object topology;     // {"nodes": [...], "edges": [...], ...} from the "topology" section, or None
-  py::object georeference;  // {"origin", "enu_from_map", ...} or None
-  py::dict cameras;        // map id -> {"nominal": {...}, "camera": {...}, "refined": bool}
-  py::list class_names;    // by trainId
+  py::list landmarks;       // dicts from the "geo" section
+  py::object topology;      // {"nodes": [...], "edges": [...], ...} from the "topology" section, or None
+  py::object georeference;  // {"origin", "enu_from_map", ...} of the landmarks' map, or None
+  py::dict georeferences;   // map id -> georeference, for every map of the atlas in the world
+  py::dict cameras;         // map id -> {"nominal": {...}, "camera": {...}, "refined": bool}
+  py::list class_names;     // by trainId
   std::map<std::string, std::string> sections;  // every extra section, as text
 };
 
@@ -95,7 +96,15 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
     const py::dict geo = ParseJson(it->second);
     if (geo.contains("landmarks")) out.landmarks = geo["landmarks"];
-    if (geo.contains("georeference")) out.georeference = geo["georeference"];
+    if (geo.contains("georeference")) out.georeference = geo["georeference"];  // version 1: one map
+    if (geo.contains("maps")) {
+      for (const py::handle entry : geo["maps"].cast<py::list>()) {
+        const py::dict e = entry.cast<py::dict>();
+        out.georeferences[e["map"]] = e["georeference"];
+      }
+      if (geo.contains("landmarks_map") && out.georeferences.contains(geo["landmarks_map"]))
+        out.georeference = out.georeferences[geo["landmarks_map"]];
+    }
   }
   for (const auto& [map_id, camera] : contents.cameras) {
     py::dict entry;
@@ -112,20 +121,25 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
 }  // namespace
 
 void AddMapBindings(py::module_& m) {
-  py::class_<LoadedMap>(m, "SemanticMap",
-                        "A map read from map.semslam. Positions are in the map frame (the first camera's: x right, "
-                        "y down, z forward), in map units for a monocular run (see georeference for metres).")
+  py::class_<LoadedMap>(
+      m, "SemanticMap",
+      "A map read from map.semslam. Positions are in the map frame (the first camera's: x right, "
+      "y down, z forward), in map units for a monocular run (see georeference for metres).")
       .def_readonly("points", &LoadedMap::points, "(N, 3) float64 map points")
       .def_readonly("labels", &LoadedMap::labels, "(N,) int32 Cityscapes trainIds, -1 for unlabeled")
       .def_readonly("confidence", &LoadedMap::confidence, "(N,) float32 posterior of each label")
-      .def_readonly("observations", &LoadedMap::observations, "(N,) int32 segmentations fused into each point")
+      .def_readonly("observations", &LoadedMap::observations,
+                    "(N,) int32 segmentations fused into each point")
       .def_readonly("keyframe_poses", &LoadedMap::keyframe_poses, "(K, 4, 4) float64 world_from_camera")
       .def_readonly("keyframe_ids", &LoadedMap::keyframe_ids)
       .def_readonly("keyframe_frames", &LoadedMap::keyframe_frames, "(K,) frame index of each keyframe")
       .def_readonly("keyframe_timestamps", &LoadedMap::keyframe_timestamps)
       .def_readonly("landmarks", &LoadedMap::landmarks, "placed landmarks (dicts), empty without GPS")
       .def_readonly("topology", &LoadedMap::topology, "the topological map as topology.json has it, or None")
-      .def_readonly("georeference", &LoadedMap::georeference, "map -> ENU -> WGS84, or None without GPS")
+      .def_readonly("georeference", &LoadedMap::georeference,
+                    "map -> ENU -> WGS84 of the map the landmarks were placed in, or None without GPS")
+      .def_readonly("georeferences", &LoadedMap::georeferences,
+                    "map id -> georeference of every map in the world (a map not named has none)")
       .def_readonly(
           "cameras", &LoadedMap::cameras,
           "per map id: the sensor's nominal camera, the camera the map was fitted to (the final BA's "

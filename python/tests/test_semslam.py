@@ -86,6 +86,7 @@ class SemslamModuleTest(unittest.TestCase):
         self.assertGreater(len(m.topology["nodes"]), 0)
         self.assertIn("edges", m.topology)
         self.assertIsNotNone(m.georeference)
+        self.assertIn(m.georeference, list(m.georeferences.values()))
 
     def test_read_trajectory_and_evaluate(self):
         stamps, poses = semslam.read_trajectory(os.path.join(self.out, "trajectory.tum"))

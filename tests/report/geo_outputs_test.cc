@@ -210,12 +210,17 @@ TEST(GeoOutputs, LocalizeThroughTheMapSection) {
   options.write_plots = false;
   const GeoOutputs outputs = WriteGeoOutputs(s.inputs, dir / "out", options);
   ASSERT_EQ(outputs.map_sections.count("geo"), 1u);
-  const GeoContext context = ParseGeoSection(outputs.map_sections.at("geo"), "map.semslam#geo");
+  const GeoContext context = ParseGeoSection(outputs.map_sections.at("geo"), "map.semslam#geo", 7);
   ASSERT_EQ(context.landmarks.size(), 5u);
-  ASSERT_TRUE(context.georeference.local);
+  ASSERT_EQ(context.maps.size(), 1u);
+  EXPECT_EQ(context.landmarks_map, s.inputs.map_id);
+  const Georeference* georeference = context.Of(s.inputs.map_id);
+  ASSERT_NE(georeference, nullptr);
+  ASSERT_TRUE(georeference->local);
+  EXPECT_EQ(context.Of(s.inputs.map_id + 1), nullptr);
   // Frame 95 (95 m along the first street, heading east), 5 m from the town hall's nearest point.
   const FramePose& frame = s.drive.frames[95];
-  const GeoPose pose = LocateInWorld(frame.world_from_camera, context, 2);
+  const GeoPose pose = LocateInWorld(frame.world_from_camera, *georeference, context, true, 2);
   const EnuFrame truth_enu(s.truth.origin);
   EXPECT_NEAR((truth_enu.ToEnu(pose.wgs84) - s.drive.truth_enu[95]).norm(), 0.0, 1.5);
   EXPECT_NEAR(pose.heading_deg, 90.0, 3.0);
@@ -223,15 +228,36 @@ TEST(GeoOutputs, LocalizeThroughTheMapSection) {
   EXPECT_EQ(pose.nearest[0].name, "Town Hall");
   EXPECT_NEAR(pose.nearest[0].distance_m, std::hypot(5.0, 15.0), 1.5);
   EXPECT_NEAR(pose.nearest[0].membership.value, std::exp(-250.0 / 1250.0), 0.05);
+  // Landmarks placed in another map are not near a pose of this one.
+  EXPECT_TRUE(LocateInWorld(frame.world_from_camera, *georeference, context, false, 2).nearest.empty());
 
-  EXPECT_THROW(ParseGeoSection("{\"format\": \"other\"}", "x"), InputError);
+  // A version-1 section (one georeference, the file's single map) is read as the georeference of map 7.
+  nlohmann::json v1 = nlohmann::json::parse(outputs.map_sections.at("geo"));
+  v1["version"] = 1;
+  v1["georeference"] = v1["maps"][0]["georeference"];
+  v1.erase("maps");
+  v1.erase("landmarks_map");
+  const GeoContext old = ParseGeoSection(v1.dump(), "map.semslam#geo", 7);
+  ASSERT_NE(old.Of(7), nullptr);
+  EXPECT_EQ(old.landmarks_map, 7u);
+  EXPECT_NEAR(old.Of(7)->enu_from_map.scale, georeference->enu_from_map.scale, 1e-9);
+
+  EXPECT_THROW(ParseGeoSection("{\"format\": \"other\"}", "x", 0), InputError);
   nlohmann::json broken = nlohmann::json::parse(outputs.map_sections.at("geo"));
-  broken["georeference"]["enu_from_map"]["scale"] = -1;
+  broken["maps"][0]["georeference"]["enu_from_map"]["scale"] = -1;
   try {
-    ParseGeoSection(broken.dump(), "map.semslam#geo");
+    ParseGeoSection(broken.dump(), "map.semslam#geo", 0);
     ADD_FAILURE();
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("enu_from_map.scale"));
+  }
+  nlohmann::json twice = nlohmann::json::parse(outputs.map_sections.at("geo"));
+  twice["maps"].push_back(twice["maps"][0]);
+  try {
+    ParseGeoSection(twice.dump(), "map.semslam#geo", 0);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("given twice"));
   }
 }
 
