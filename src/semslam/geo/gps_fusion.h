@@ -60,7 +60,7 @@ struct GpsFusionOptions {
   double translation_sigma_fraction = 0.01;
   double translation_sigma_floor_m = 0.02;
   double rotation_sigma_rad = 0.002;
-  double log_scale_sigma_per_sqrt_m = 0.005;
+  double log_scale_sigma_per_sqrt_m = 0.002;
   double prior_loss_scale = 2.0;  // Cauchy scale, in sigmas of the fix (the last of the graduated ones)
   double outlier_sigma = 5.0;     // a fix farther than this many sigmas from its fused frame is dropped
   int max_rounds = 3;             // solves after the graduated ones, each without the fixes dropped before
