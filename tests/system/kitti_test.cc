@@ -49,7 +49,8 @@ TEST(Kitti07, MonocularInitializesEarlyTracksEveryLaterFrameAndStaysAccurate) {
   // Accuracy: ATE after Sim(3) alignment.
   ASSERT_TRUE(j.contains("ate_rmse")) << j.dump(2);
   EXPECT_EQ(j.value("ate_alignment", ""), "sim3");
-  EXPECT_LE(j["ate_rmse"].get<double>(), 0.3);  // measured 0.13-0.14 m (0.37 m without self-calibration)
+  // Within 5 % of the reproducible value: 0.1363 m (0.37 m without self-calibration).
+  EXPECT_LE(j["ate_rmse"].get<double>(), 0.143);
   EXPECT_NEAR(j.value("path_length_m", 0.0), 90.6, 1.0);
   EXPECT_GE(j.value("ate_matched", 0), 160 - from);
 
@@ -72,9 +73,9 @@ TEST(Kitti07, MonocularInitializesEarlyTracksEveryLaterFrameAndStaysAccurate) {
   const fs::path config = dir / "no_refinement.yaml";
   std::ofstream(config) << "mapping:\n  final_refine_intrinsics: false\n";
   const fs::path plain = dir / "plain";
-  const CommandResult p = RunSemslam({"run", "--sequence", sequence.string(), "--out", plain.string(), "--mode",
-                                      "mono", "--frames", "0:160", "--pacing", "synchronous", "--config",
-                                      config.string(), "-q"});
+  const CommandResult p =
+      RunSemslam({"run", "--sequence", sequence.string(), "--out", plain.string(), "--mode", "mono",
+                  "--frames", "0:160", "--pacing", "synchronous", "--config", config.string(), "-q"});
   ASSERT_TRUE(p.Succeeded()) << p.Describe();
   const nlohmann::json pj = ReadJson(plain / "run.json");
   EXPECT_TRUE(pj.value("intrinsics_refinement", nlohmann::json{1}).empty());
