@@ -120,8 +120,9 @@ void AppendSummary(Page& page, const ReportInputs& in) {
       const auto k1 = f.Number(*refined, "k1", "intrinsics_refinement.refined.k1");
       if (!fx0 || !fx || !k1) continue;
       const bool accepted = f.Bool(r, "accepted", "intrinsics_refinement.accepted").value_or(false);
-      std::string value = accepted ? fmt::format("refined: f {:.1f} &rarr; {:.1f}&nbsp;px, k1 {:.4f}", *fx0, *fx, *k1)
-                                   : fmt::format("as given (f {:.1f}&nbsp;px)", *fx0);
+      std::string value =
+          accepted ? fmt::format("refined: f {:.1f} &rarr; {:.1f}&nbsp;px, k1 {:.4f}", *fx0, *fx, *k1)
+                   : fmt::format("as given (f {:.1f}&nbsp;px)", *fx0);
       if (!accepted) {
         if (const auto reason = f.String(r, "reason", "intrinsics_refinement.reason")) {
           value += ": " + HtmlEscape(*reason);
@@ -183,19 +184,23 @@ void AppendSummary(Page& page, const ReportInputs& in) {
     }
   }
   if (const auto accuracy = f.Number(run, "label_accuracy", "label_accuracy")) {
-    // Two measures (semantic_evaluation.h): 3D, against the surface each point lies on, when the truth has
-    // depth; 2D, against the truth at the point's keypoints.
+    // The headline (semantic_evaluation.h, formats.md): 3D, against the surface each point lies on with the
+    // map placed in the world by one alignment, when the truth has depth; else 2D, against the truth at the
+    // point's keypoints. The kinder figures follow it.
     std::string value;
     const json* evaluation = f.Object(run, "label_evaluation", "label_evaluation");
     if (const auto a3 = f.Number(run, "label_accuracy_3d", "label_accuracy_3d")) {
-      value = FormatPercent(*a3) + " of the map points carry the class of the surface they lie on (3D";
-      const json* surface = evaluation ? f.Object(*evaluation, "surface_points", "label_evaluation.surface_points")
-                                       : nullptr;
-      if (const auto n = surface ? f.Integer(*surface, "evaluated", "label_evaluation.surface_points.evaluated")
-                                 : std::nullopt) {
+      value = FormatPercent(*accuracy) +
+              " of the map points carry the class of the surface they lie on (3D, the map placed by one "
+              "alignment";
+      const json* surface =
+          evaluation ? f.Object(*evaluation, "surface_points", "label_evaluation.surface_points") : nullptr;
+      if (const auto n = surface
+                             ? f.Integer(*surface, "evaluated", "label_evaluation.surface_points.evaluated")
+                             : std::nullopt) {
         value += ", " + GroupThousands(*n) + " evaluated";
       }
-      value += ")";
+      value += "); by each keyframe's own pose: " + FormatPercent(*a3);
       if (const auto a2 = f.Number(run, "label_accuracy_2d", "label_accuracy_2d")) {
         value += "; the class at their keypoints (2D): " + FormatPercent(*a2);
       }
@@ -342,7 +347,8 @@ void AppendSummary(Page& page, const ReportInputs& in) {
         ++other_classes;
       }
     }
-    std::stable_sort(counts.begin(), counts.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    std::stable_sort(counts.begin(), counts.end(),
+                     [](const auto& a, const auto& b) { return a.second > b.second; });
     if (other > 0) counts.emplace_back(kNoLabel, other);
     if (!counts.empty()) {
       page.body +=
@@ -389,13 +395,16 @@ void AppendProvenance(Page& page, const ReportInputs& in) {
   if (provenance != nullptr) {
     if (const auto v = f.String(*provenance, "command_line", "provenance.command_line"))
       rows.push_back({"Command", "<code>" + HtmlEscape(*v) + "</code>"});
-    std::string version = HtmlEscape(f.String(*provenance, "version", "provenance.version").value_or("unknown"));
+    std::string version =
+        HtmlEscape(f.String(*provenance, "version", "provenance.version").value_or("unknown"));
     if (const auto commit = f.String(*provenance, "commit", "provenance.commit"))
       version += ", commit <code>" + HtmlEscape(*commit) + "</code>";
-    if (const auto type = f.String(*provenance, "build_type", "provenance.build_type"); type && !type->empty())
+    if (const auto type = f.String(*provenance, "build_type", "provenance.build_type");
+        type && !type->empty())
       version += ", " + HtmlEscape(*type) + " build";
     rows.push_back({"semslam", version});
-    if (const auto v = f.String(*provenance, "date", "provenance.date")) rows.push_back({"Date (UTC)", HtmlEscape(*v)});
+    if (const auto v = f.String(*provenance, "date", "provenance.date"))
+      rows.push_back({"Date (UTC)", HtmlEscape(*v)});
     if (const auto v = f.Integer(*provenance, "host_cores", "provenance.host_cores"))
       rows.push_back({"Host", fmt::format("{} cores", *v)});
   }
@@ -405,22 +414,31 @@ void AppendProvenance(Page& page, const ReportInputs& in) {
     if (const json* frames = f.Array(*config, "frames", "config.frames"); frames && frames->size() == 2 &&
                                                                           (*frames)[0].is_number_integer() &&
                                                                           (*frames)[1].is_number_integer()) {
-      rows.push_back({"Frames", fmt::format("{}:{}", (*frames)[0].get<long long>(), (*frames)[1].get<long long>())});
+      rows.push_back(
+          {"Frames", fmt::format("{}:{}", (*frames)[0].get<long long>(), (*frames)[1].get<long long>())});
     }
-    for (const auto& [key, label] : std::initializer_list<std::pair<const char*, const char*>>{
-             {"mode", "Mode"}, {"pacing", "Pacing"}, {"segmenter", "Segmenter"}, {"gps", "GPS log"},
-             {"landmarks", "Landmarks"}, {"map_in", "Starting map"}, {"vocabulary", "Vocabulary"}}) {
+    for (const auto& [key, label] :
+         std::initializer_list<std::pair<const char*, const char*>>{{"mode", "Mode"},
+                                                                    {"pacing", "Pacing"},
+                                                                    {"segmenter", "Segmenter"},
+                                                                    {"gps", "GPS log"},
+                                                                    {"landmarks", "Landmarks"},
+                                                                    {"map_in", "Starting map"},
+                                                                    {"vocabulary", "Vocabulary"}}) {
       if (const auto v = f.String(*config, key, std::string("config.") + key); v && !v->empty())
         rows.push_back({label, HtmlEscape(*v)});
     }
-    if (const auto v = f.Integer(*config, "gps_every", "config.gps_every"); v && f.String(*config, "gps", "config.gps").value_or("") != "")
+    if (const auto v = f.Integer(*config, "gps_every", "config.gps_every");
+        v && f.String(*config, "gps", "config.gps").value_or("") != "")
       rows.push_back({"GPS sampling", fmt::format("one fix every {} frames", *v)});
   }
   AppendKeyValueTable(page.body, "", rows);
   if (config != nullptr) {
     if (const json* slam = f.Object(*config, "slam", "config.slam")) {
-      page.body += "<details><summary>Every SLAM option used (as <code>config.yaml</code>, which <code>--config</code> "
-                   "reads)</summary>\n<table class=\"kv\">\n";
+      page.body +=
+          "<details><summary>Every SLAM option used (as <code>config.yaml</code>, which "
+          "<code>--config</code> "
+          "reads)</summary>\n<table class=\"kv\">\n";
       for (const auto& [section, fields] : slam->items()) {
         if (!fields.is_object()) continue;
         for (const auto& [key, value] : fields.items()) {
@@ -510,12 +528,14 @@ void AppendTimeAnalysis(Page& page, const ReportInputs& in) {
     if (const json* config = f.Object(in.run, "config", "config")) {
       pacing = f.String(*config, "pacing", "config.pacing").value_or("");
     }
-    const std::string waits = pacing == "realtime"      ? ", waiting for the camera's rate (pacing realtime)"
-                              : pacing == "synchronous" ? ", waiting for mapping after each keyframe (pacing synchronous)"
-                              : pacing.empty()          ? ""
-                                                        : " (pacing " + pacing + ")";
+    const std::string waits = pacing == "realtime" ? ", waiting for the camera's rate (pacing realtime)"
+                              : pacing == "synchronous"
+                                  ? ", waiting for mapping after each keyframe (pacing synchronous)"
+                              : pacing.empty() ? ""
+                                               : " (pacing " + pacing + ")";
     Row row{"Whole system",
-            "per frame: loading, tracking" + waits + "; mean: run seconds / frames, start-up and outputs included",
+            "per frame: loading, tracking" + waits +
+                "; mean: run seconds / frames, start-up and outputs included",
             {},
             {},
             {},

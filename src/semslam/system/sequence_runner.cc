@@ -522,8 +522,10 @@ RunSummary RunSequence(const RunOptions& options) {
   }
   run["segmentation"] = segmentation;
   if (const auto label_dir = sequence->LabelDirectory(); label_dir && stats.segmented_keyframes > 0) {
-    // label_accuracy: the 3D measure (the surface each point lies on) when the truth has depth and poses,
-    // else the 2D one (the truth at the point's keypoints); both named in label_accuracy_3d / _2d.
+    // label_accuracy, the headline, is what a user of the map meets: each point's class against the surface
+    // it lies on, with the whole map put in the world by the trajectory's one alignment
+    // (label_accuracy_3d_global), when the truth has depth and poses; else the 2D measure (the truth at the
+    // point's keypoints).
     const SemanticEvaluation evaluation = EvaluateSemantics(slam.map(), *label_dir);
     summary.label_accuracy = evaluation.fused.Accuracy();
     run["label_accuracy_2d"] = evaluation.fused.Accuracy();
@@ -537,7 +539,7 @@ RunSummary RunSequence(const RunOptions& options) {
         const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
         const SurfaceEvaluation surface = EvaluateSemantics3d(
             slam.map(), {*label_dir, *depth_dir, *truth, ate.truth_from_estimate, stereo});
-        summary.label_accuracy = surface.per_frame.points.Accuracy();
+        summary.label_accuracy = surface.global.points.Accuracy();
         run["label_accuracy_3d"] = surface.per_frame.points.Accuracy();
         run["label_accuracy_3d_global"] = surface.global.points.Accuracy();
         run["label_evaluation"]["surface_points"] = SurfaceJson(surface.per_frame);
