@@ -401,6 +401,30 @@ def finish(args, results):
         bench_report.duration_text(results["seconds"])))
 
 
+def merge_results(loaded):
+    """One results dict from several [(path, results)] of the same binary: their cases together, their commands
+    and run counts named. Raises SystemExit when the binaries or the case names clash."""
+    first_path, merged = loaded[0]
+    merged = dict(merged)
+    merged["cases"] = dict(merged.get("cases", {}))
+    for path, results in loaded[1:]:
+        if results.get("binary_version") != merged.get("binary_version"):
+            raise SystemExit("benchmark: %s ran %r, %s ran %r: results of two binaries are not one table" % (
+                first_path, merged.get("binary_version"), path, results.get("binary_version")))
+        for name, case in results.get("cases", {}).items():
+            if name in merged["cases"]:
+                raise SystemExit("benchmark: case %s is in both %s and %s" % (name, first_path, path))
+            merged["cases"][name] = case
+        merged["seconds"] = merged.get("seconds", 0) + results.get("seconds", 0)
+        merged["quick"] = merged.get("quick") or results.get("quick")
+    if len(loaded) > 1:
+        merged["command"] = " ; ".join(r.get("command", "?") for _, r in loaded)
+        for key in ("runs", "busy_runs"):
+            values = [str(r.get(key, "?")) for _, r in loaded]
+            merged[key] = values[0] if len(set(values)) == 1 else " or ".join(values) + " (by command)"
+    return merged
+
+
 def read_known_limits(path):
     if path and os.path.exists(path):
         with open(path, encoding="utf-8") as f:
@@ -439,7 +463,9 @@ def parse_args(argv):
     p.add_argument("--update-baseline", action="store_true", help="write the results as the new baseline")
     p.add_argument("--write-docs", action="store_true", help="write docs/results.md from the results")
     p.add_argument("--known-limits", default=os.path.join(REPO, "docs", "known_limits.md"))
-    p.add_argument("--markdown", metavar="RESULTS", help="print docs/results.md made from RESULTS and exit")
+    p.add_argument("--markdown", metavar="RESULTS", nargs="+",
+                   help="print docs/results.md made from RESULTS (several: runs of one binary, e.g. --quick and "
+                   "the long drive's cases, their cases together) and exit")
     p.add_argument("--list", action="store_true", help="list the planned runs and exit")
     args = p.parse_args(argv)
     if args.runs is None:
@@ -454,8 +480,11 @@ def parse_args(argv):
 def main(argv):
     args = parse_args(argv)
     if args.markdown:
-        with open(args.markdown, encoding="utf-8") as f:
-            print(bench_report.markdown(json.load(f), read_known_limits(args.known_limits)))
+        loaded = []
+        for path in args.markdown:
+            with open(path, encoding="utf-8") as f:
+                loaded.append((path, json.load(f)))
+        print(bench_report.markdown(merge_results(loaded), read_known_limits(args.known_limits)))
         return 0
     cases = bench_cases.all_cases(args.quick, args.first_output, args.first_output_dry_run)
     if args.cases:

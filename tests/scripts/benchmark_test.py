@@ -174,6 +174,30 @@ class Markdown(unittest.TestCase):
         self.assertLess(len(report.markdown(r).splitlines()), 400)
 
 
+class Merge(unittest.TestCase):
+    def test_cases_of_one_binary_make_one_table(self):
+        a = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)", quick=True)
+        b = results({"ate_m": figure(quiet=[0.2])}, binary_version="semslam 1 (abc)", runs=3, busy_runs=3,
+                    command="scripts/benchmark.py --cases kitti00")
+        b["cases"] = {"case_b": dict(b["cases"]["case_a"], title="case B")}
+        a["runs"], a["busy_runs"] = 2, 0
+        merged = benchmark.merge_results([("a.json", a), ("b.json", b)])
+        self.assertEqual(sorted(merged["cases"]), ["case_a", "case_b"])
+        self.assertEqual(merged["seconds"], 2 * 754)
+        self.assertEqual(merged["runs"], "2 or 3 (by command)")
+        self.assertIn("kitti00", merged["command"])
+        self.assertIn("case B", report.markdown(merged))
+
+    def test_two_binaries_or_one_case_twice_are_refused(self):
+        a = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
+        other = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (def)")
+        with self.assertRaises(SystemExit):
+            benchmark.merge_results([("a.json", a), ("b.json", other)])
+        same = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
+        with self.assertRaises(SystemExit):
+            benchmark.merge_results([("a.json", a), ("c.json", same)])
+
+
 class Geo(unittest.TestCase):
     # A track going east along the equator, 1 m a frame, then back west: a revisit of every place.
     TRACK = [(0.0, k / 111319.49, 0.0) for k in range(100)] + [(0.0, (99 - k) / 111319.49, 0.0) for k in range(100)]
