@@ -170,7 +170,9 @@ TEST(AtlasGeoreference, LocalizationInAMapThatIsNotInTheWorldGivesNoWgs84) {
       const bool map_outside = std::stoul(fields[3]) == outside;
       in_outside += map_outside ? 1 : 0;
       with_wgs84 += fields[11].empty() ? 0 : 1;
-      if (map_outside) EXPECT_TRUE(fields[11].empty()) << "a pose in a map out of the world has a latitude";
+      if (map_outside) {
+        EXPECT_TRUE(fields[11].empty()) << "a pose in a map out of the world has a latitude";
+      }
     }
     if (std::string(name) == "outside") {
       EXPECT_EQ(in_outside, rows);
