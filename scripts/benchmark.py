@@ -418,6 +418,7 @@ def merge_results(loaded):
         merged["seconds"] = merged.get("seconds", 0) + results.get("seconds", 0)
         merged["quick"] = merged.get("quick") or results.get("quick")
     if len(loaded) > 1:
+        merged["merged_from"] = len(loaded)
         merged["command"] = " ; ".join(r.get("command", "?") for _, r in loaded)
         for key in ("runs", "busy_runs"):
             values = [str(r.get(key, "?")) for _, r in loaded]

@@ -1,7 +1,7 @@
 // The global bundle adjustment of a map in windows: bounded problems that refine a disturbed map, without the
-// observations that fail the chi-square test. Which keyframes a window holds still is measured on the
-// 10,000-frame soak (docs/results.md), where leaving the later ones out drifted: this toy street, stereo and
-// noiseless, cannot tell the two forms apart.
+// observations that fail the chi-square test. Which keyframes a window holds still was measured on a
+// 10,000-frame soak (development notes in docs/results.md's git history), where leaving the later ones out
+// drifted: this toy street, stereo and noiseless, cannot tell the two forms apart.
 
 #include "semslam/mapping/map_optimization.h"
 
