@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "semslam/geometry/camera.h"
 #include "semslam/geometry/rigid3.h"
 #include "semslam/geometry/trajectory.h"
 
@@ -17,6 +18,8 @@ namespace py = pybind11;
 py::array_t<double> PosesArray(const std::vector<Rigid3d>& poses);
 // One 4 x 4 matrix.
 py::array_t<double> PoseArray(const Rigid3d& pose);
+// {"width", "height", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"}.
+py::dict CameraDict(const PinholeCamera& camera);
 // A trajectory from (timestamps (N), poses (N x 4 x 4)) arrays; throws ValueError on bad shapes.
 Trajectory TrajectoryFromArrays(const py::array_t<double>& timestamps, const py::array_t<double>& poses);
 

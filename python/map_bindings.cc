@@ -32,22 +32,6 @@ struct LoadedMap {
   std::map<std::string, std::string> sections;  // every extra section, as text
 };
 
-py::dict CameraDict(const PinholeCamera& c) {
-  py::dict d;
-  d["width"] = c.width;
-  d["height"] = c.height;
-  d["fx"] = c.fx;
-  d["fy"] = c.fy;
-  d["cx"] = c.cx;
-  d["cy"] = c.cy;
-  d["k1"] = c.distortion.k1;
-  d["k2"] = c.distortion.k2;
-  d["p1"] = c.distortion.p1;
-  d["p2"] = c.distortion.p2;
-  d["k3"] = c.distortion.k3;
-  return d;
-}
-
 py::object ParseJson(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
 LoadedMap LoadMap(const std::filesystem::path& path) {

@@ -15,6 +15,22 @@
 
 namespace semslam::python {
 
+py::dict CameraDict(const PinholeCamera& c) {
+  py::dict d;
+  d["width"] = c.width;
+  d["height"] = c.height;
+  d["fx"] = c.fx;
+  d["fy"] = c.fy;
+  d["cx"] = c.cx;
+  d["cy"] = c.cy;
+  d["k1"] = c.distortion.k1;
+  d["k2"] = c.distortion.k2;
+  d["p1"] = c.distortion.p1;
+  d["p2"] = c.distortion.p2;
+  d["k3"] = c.distortion.k3;
+  return d;
+}
+
 py::array_t<double> PoseArray(const Rigid3d& pose) {
   py::array_t<double> out({4, 4});
   auto m = out.mutable_unchecked<2>();
@@ -39,7 +55,8 @@ py::array_t<double> PosesArray(const std::vector<Rigid3d>& poses) {
 
 Trajectory TrajectoryFromArrays(const py::array_t<double>& timestamps, const py::array_t<double>& poses) {
   if (timestamps.ndim() != 1) throw py::value_error("timestamps must be a 1-D array");
-  if (poses.ndim() != 3 || poses.shape(1) != 4 || poses.shape(2) != 4 || poses.shape(0) != timestamps.shape(0)) {
+  if (poses.ndim() != 3 || poses.shape(1) != 4 || poses.shape(2) != 4 ||
+      poses.shape(0) != timestamps.shape(0)) {
     throw py::value_error("poses must be an N x 4 x 4 array, one per timestamp");
   }
   const auto t = timestamps.unchecked<1>();
@@ -131,7 +148,8 @@ PYBIND11_MODULE(semslam, m) {
   m.def(
       "evaluate",
       [](const py::object& estimate, const py::object& truth, const std::string& align,
-         std::optional<std::filesystem::path> times, double max_dt, std::optional<std::pair<size_t, size_t>> frames) {
+         std::optional<std::filesystem::path> times, double max_dt,
+         std::optional<std::pair<size_t, size_t>> frames) {
         EvalOptions options;
         options.alignment = ParseAlignment(align);
         options.max_dt = max_dt;
@@ -139,11 +157,11 @@ PYBIND11_MODULE(semslam, m) {
           FrameRange range;
           if (frames) range = FrameRange{frames->first, frames->second};
           return EvaluationDict(EvaluateTrajectoryFiles(py::cast<std::filesystem::path>(estimate),
-                                                        py::cast<std::filesystem::path>(truth), times, options,
-                                                        range));
+                                                        py::cast<std::filesystem::path>(truth), times,
+                                                        options, range));
         }
-        return EvaluationDict(EvaluateTrajectory(TrajectoryOf(estimate, "estimate"), TrajectoryOf(truth, "truth"),
-                                                 options));
+        return EvaluationDict(
+            EvaluateTrajectory(TrajectoryOf(estimate, "estimate"), TrajectoryOf(truth, "truth"), options));
       },
       py::arg("estimate"), py::arg("truth"), py::arg("align") = "sim3", py::arg("times") = py::none(),
       py::arg("max_dt") = 0.02, py::arg("frames") = py::none(),

@@ -18,14 +18,8 @@ namespace semslam::python {
 
 namespace {
 
-py::dict CameraDict(const PinholeCamera& camera, const std::optional<StereoRig>& stereo) {
-  py::dict d;
-  d["width"] = camera.width;
-  d["height"] = camera.height;
-  d["fx"] = camera.fx;
-  d["fy"] = camera.fy;
-  d["cx"] = camera.cx;
-  d["cy"] = camera.cy;
+py::dict SequenceCameraDict(const PinholeCamera& camera, const std::optional<StereoRig>& stereo) {
+  py::dict d = CameraDict(camera);
   if (stereo) d["baseline"] = stereo->baseline;
   return d;
 }
@@ -75,7 +69,7 @@ class Sequence {
     Check(i);
     return ImageArray(sequence_->LoadImage(i, camera));
   }
-  py::dict Camera() const { return CameraDict(sequence_->camera(), sequence_->stereo()); }
+  py::dict Camera() const { return SequenceCameraDict(sequence_->camera(), sequence_->stereo()); }
   std::string Name() const { return sequence_->name(); }
   py::object GroundTruth() const {
     const auto truth = sequence_->GroundTruth();
@@ -92,7 +86,8 @@ class Sequence {
 
  private:
   void Check(size_t i) const {
-    if (i >= sequence_->size()) throw py::index_error("frame " + std::to_string(i) + " is outside the sequence");
+    if (i >= sequence_->size())
+      throw py::index_error("frame " + std::to_string(i) + " is outside the sequence");
   }
   std::unique_ptr<ImageSequence> sequence_;
 };
@@ -132,7 +127,8 @@ class PySystem {
     }
     py::dict d;
     d["state"] = std::string(ToString(result.state));
-    d["pose"] = result.camera_from_world ? py::object(PoseArray(result.camera_from_world->Inverse())) : py::none();
+    d["pose"] =
+        result.camera_from_world ? py::object(PoseArray(result.camera_from_world->Inverse())) : py::none();
     d["matched"] = result.matched_points;
     d["new_keyframe"] = result.new_keyframe;
     d["initialized"] = result.initialized_now;
@@ -191,16 +187,20 @@ void AddSystemBindings(py::module_& m) {
       "open_sequence", [](const std::filesystem::path& path) { return Sequence(path); }, py::arg("path"),
       "Opens a KITTI odometry sequence, a KITTI raw drive, the synthetic city or an image folder.");
 
-  py::class_<PySystem>(m, "System",
-                       "The SLAM system fed frame by frame. process() returns the frame's pose (world_from_camera, "
-                       "4x4, or None while not tracking) and tracking state.")
-      .def(py::init<const py::dict&, const std::string&, const std::string&, std::optional<std::filesystem::path>,
-                    std::optional<std::filesystem::path>, const std::string&, std::optional<std::filesystem::path>>(),
+  py::class_<PySystem>(
+      m, "System",
+      "The SLAM system fed frame by frame. process() returns the frame's pose (world_from_camera, "
+      "4x4, or None while not tracking) and tracking state.")
+      .def(py::init<const py::dict&, const std::string&, const std::string&,
+                    std::optional<std::filesystem::path>, std::optional<std::filesystem::path>,
+                    const std::string&, std::optional<std::filesystem::path>>(),
            py::arg("camera"), py::arg("mode") = "mono", py::arg("pacing") = "synchronous",
            py::arg("config") = py::none(), py::arg("vocabulary") = py::none(), py::arg("segmenter") = "none",
            py::arg("labels") = py::none())
-      .def("process", &PySystem::Process, py::arg("image"), py::arg("timestamp"), py::arg("right") = py::none())
-      .def("finish", &PySystem::Finish, "Lets mapping and loop closing finish and runs the final optimization")
+      .def("process", &PySystem::Process, py::arg("image"), py::arg("timestamp"),
+           py::arg("right") = py::none())
+      .def("finish", &PySystem::Finish,
+           "Lets mapping and loop closing finish and runs the final optimization")
       .def("trajectory", &PySystem::Trajectory, "(timestamps, poses) of every tracked frame")
       .def("statistics", &PySystem::Statistics)
       .def("save_map", &PySystem::SaveMap, py::arg("path"));

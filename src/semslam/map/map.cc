@@ -1,6 +1,7 @@
 #include "semslam/map/map.h"
 
 #include <algorithm>
+#include <map>
 #include <set>
 
 #include "semslam/core/error.h"
@@ -171,6 +172,20 @@ std::vector<MapPoint*> Map::MapPointsOfMap(std::uint32_t map_id) const {
 size_t Map::NumKeyFramesOfMap(std::uint32_t map_id) const {
   return static_cast<size_t>(std::count_if(keyframes_.begin(), keyframes_.end(),
                                            [map_id](const KeyFrame* kf) { return kf->map_id() == map_id; }));
+}
+
+std::uint32_t Map::MapWithMostKeyFrames() const {
+  std::map<std::uint32_t, size_t> counts;
+  for (const KeyFrame* kf : keyframes_) ++counts[kf->map_id()];
+  std::uint32_t most = active_map_id_;
+  size_t most_count = 0;
+  for (const auto& [map_id, count] : counts) {
+    if (count > most_count) {
+      most = map_id;
+      most_count = count;
+    }
+  }
+  return most;
 }
 
 std::vector<KeyFrame*> Map::KeyFrames() const { return {keyframes_.begin(), keyframes_.end()}; }

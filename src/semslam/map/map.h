@@ -50,8 +50,9 @@ struct GapLink {
   double before_scale = 1.0;  // before->scale_correction() then (the link stretches with the map there)
 };
 
-// A gap link between the good keyframes standing for its two ends (each end itself, or the nearest good ancestor
-// of a culled one), as before_from_after between them; nullopt when an end has none (its map was given up).
+// A gap link between the good keyframes standing for its two ends (each end itself, or the nearest good
+// ancestor of a culled one), as before_from_after between them; nullopt when an end has none (its map was
+// given up).
 struct GapEdge {
   KeyFrame* before = nullptr;
   KeyFrame* after = nullptr;
@@ -107,6 +108,8 @@ class Map {
   std::vector<KeyFrame*> KeyFramesOfMap(std::uint32_t map_id) const;  // by id
   std::vector<MapPoint*> MapPointsOfMap(std::uint32_t map_id) const;  // by id
   size_t NumKeyFramesOfMap(std::uint32_t map_id) const;
+  // The map with the most keyframes (the lowest id of a tie); the active one when no map has any.
+  std::uint32_t MapWithMostKeyFrames() const;
 
   // With a read lock held.
   std::vector<KeyFrame*> KeyFrames() const;        // active, by id

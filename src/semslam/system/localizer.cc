@@ -74,20 +74,6 @@ std::string NearestTrueLandmark(const SceneTruth& truth, const Eigen::Vector3d& 
   return best;
 }
 
-// The map with the most keyframes (the one a single-map geo section of an old map file stands for).
-std::uint32_t LargestMap(const Map& map) {
-  auto lock = map.ReadLock();
-  std::uint32_t largest = 0;
-  size_t most = 0;
-  for (const std::uint32_t id : map.MapIds()) {
-    if (map.NumKeyFramesOfMap(id) > most) {
-      most = map.NumKeyFramesOfMap(id);
-      largest = id;
-    }
-  }
-  return largest;
-}
-
 // A georeference of the session's own, from its GPS, for each map the map file does not place in the world:
 // the robust similarity (SE(3) for a metric stereo map) of the frames localized in it onto their fixes.
 std::map<std::uint32_t, Georeference> SessionGeoreferences(const std::vector<LocalizedFrame>& localized,
@@ -150,8 +136,10 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   const MapFileContents contents = slam.LoadMap(options.map);
   GeoContext geo;
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
+    auto lock = slam.map().ReadLock();
+    // A version-1 section placed the file's one map: today's largest.
     geo = ParseGeoSection(it->second, std::filesystem::path(options.map.string() + "#geo"),
-                          LargestMap(slam.map()));
+                          slam.map().MapWithMostKeyFrames());
   }
   std::optional<GpsLog> gps;
   if (!options.gps.empty()) {

@@ -212,20 +212,6 @@ nlohmann::json SurfaceJson(const SurfaceScores& e) {
   return j;
 }
 
-// The map with the most keyframes (the one a single-map geo section of an old map file stands for).
-std::uint32_t LargestMap(const Map& map) {
-  auto lock = map.ReadLock();
-  std::uint32_t largest = map.active_map_id();
-  size_t most = 0;
-  for (const std::uint32_t id : map.MapIds()) {
-    if (map.NumKeyFramesOfMap(id) > most) {
-      most = map.NumKeyFramesOfMap(id);
-      largest = id;
-    }
-  }
-  return largest;
-}
-
 // The main map's place in the world for the outputs: where its GPS put it this run (the map now lies in the
 // ENU frame itself), or where an earlier run did.
 std::optional<GeoInputs::Placed> PlacedMainMap(const std::optional<AtlasGeoreference>& placed_by_gps,
@@ -339,9 +325,11 @@ RunSummary RunSequence(const RunOptions& options) {
   if (!options.map_in.empty()) {
     const MapFileContents contents = slam.LoadMap(options.map_in);
     if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
-      known_georeferences =
-          ParseGeoSection(it->second, fs::path(options.map_in.string() + "#geo"), LargestMap(slam.map()))
-              .maps;
+      auto lock = slam.map().ReadLock();
+      // A version-1 section placed the file's one map: today's largest.
+      known_georeferences = ParseGeoSection(it->second, fs::path(options.map_in.string() + "#geo"),
+                                            slam.map().MapWithMostKeyFrames())
+                                .maps;
     }
   }
   slam.NameSession(sequence->name(), sequence->directory().string());
