@@ -19,5 +19,6 @@ void AddVocabCommand(CLI::App& app);
 void AddSegmentCommand(CLI::App& app);
 void AddBenchCommand(CLI::App& app);
 void AddComposeCommand(CLI::App& app);
+void AddMergeCommand(CLI::App& app);
 
 }  // namespace semslam::cli

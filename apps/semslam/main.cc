@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   cli::AddDemoCommand(app);
   cli::AddSynthCommand(app);
   cli::AddRunCommand(app);
+  cli::AddMergeCommand(app);
   cli::AddLocalizeCommand(app);
   cli::AddRouteCommand(app);
   cli::AddEvalCommand(app);

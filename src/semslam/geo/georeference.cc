@@ -4,8 +4,24 @@
 #include <limits>
 
 #include "semslam/core/error.h"
+#include "semslam/geometry/alignment.h"
 
 namespace semslam {
+
+Sim3d EnuFromEnu(const EnuFrame& to, const EnuFrame& from) {
+  // Both frames are local tangent planes of one ellipsoid: over a few kilometres one rigid transform, found
+  // from points a kilometre apart.
+  Points3d in_from, in_to;
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1000, 0, 0), Eigen::Vector3d(0, 1000, 0),
+        Eigen::Vector3d(0, 0, 1000), Eigen::Vector3d(-1000, -1000, 0)}) {
+    in_from.push_back(p);
+    in_to.push_back(to.ToEnu(from.ToWgs84(p)));
+  }
+  const std::optional<Rigid3d> rigid = AlignRigid3(in_from, in_to);
+  Require(rigid.has_value(), "two ENU frames could not be related");
+  return Sim3d(*rigid);
+}
 
 Sim3d LevelFromCameraWorld() {
   Eigen::Matrix3d r;

@@ -70,6 +70,9 @@ struct Georeference {
   double MetresPerMapUnit() const { return enu_from_map.scale; }
 };
 
+// ENU of `to` from ENU of `from`: a rigid transform (scale 1), exact to millimetres over a few kilometres.
+Sim3d EnuFromEnu(const EnuFrame& to, const EnuFrame& from);
+
 // The rotation that maps the first camera's frame (x right, y down, z forward: KITTI's world) to a level
 // "east = right, north = forward, up = -down" frame: a stand-in for enu_from_map when there is no GPS, for
 // top views and turn directions of a roughly level camera. Scale 1.

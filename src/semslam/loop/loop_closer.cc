@@ -128,6 +128,11 @@ void LoopCloser::Reset() {
   last_loop_keyframe_id_ = 0;
 }
 
+void LoopCloser::ForgetCandidates() {
+  consistent_groups_.clear();
+  enough_consistent_candidates_.clear();
+}
+
 std::vector<LoopEvent> LoopCloser::loops() const {
   std::lock_guard lock(loops_mutex_);
   std::vector<LoopEvent> out;
@@ -157,17 +162,7 @@ void LoopCloser::Run() {
       queue_.pop_front();
       busy_ = true;
     }
-    Stopwatch watch;
-    if (DetectLoop(current)) {
-      if (ComputeSim3(current)) {
-        CorrectLoop(current);
-      } else {
-        auto lock = map_.WriteLock();
-        for (KeyFrame* kf : enough_consistent_candidates_) kf->SetErase();
-        current->SetErase();
-      }
-    }
-    timing_.Add("loop_closing", watch.ElapsedMs());
+    ProcessKeyFrame(current);
     {
       std::lock_guard lock(queue_mutex_);
       busy_ = false;
@@ -179,7 +174,24 @@ void LoopCloser::Run() {
   queue_cv_.notify_all();
 }
 
-bool LoopCloser::DetectLoop(KeyFrame* current) {
+bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps) {
+  Stopwatch watch;
+  bool corrected = false;
+  if (DetectLoop(current, excluded_maps)) {
+    if (ComputeSim3(current)) {
+      CorrectLoop(current);
+      corrected = true;
+    } else {
+      auto lock = map_.WriteLock();
+      for (KeyFrame* kf : enough_consistent_candidates_) kf->SetErase();
+      current->SetErase();
+    }
+  }
+  timing_.Add("loop_closing", watch.ElapsedMs());
+  return corrected;
+}
+
+bool LoopCloser::DetectLoop(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps) {
   ScopedTimer timer(timing_, "loop_detection");
   auto lock = map_.ReadLock();
   if (current->is_bad()) return false;
@@ -212,6 +224,7 @@ bool LoopCloser::DetectLoop(KeyFrame* current) {
   candidate_options.excluded = {current->id()};
   for (KeyFrame* kf : covisibles) candidate_options.excluded.insert(kf->id());
   if (!options_.merge_maps) candidate_options.map_id = current->map_id();
+  candidate_options.excluded_maps = excluded_maps;
   const std::vector<KeyFrame*> candidates =
       FindPlaceCandidates(current->bow, database_, map_, candidate_options);
   if (candidates.empty()) {
@@ -361,7 +374,8 @@ bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& ca
   const double ratio = *structure_ratio;
   const bool agrees = DepthRatioWithin(ratio, options_.max_depth_ratio);
   spdlog::info(
-      "loop candidate: keyframe {} with keyframe {}: its transform (scale {:.3f}) puts the matched points at {:.2f} "
+      "loop candidate: keyframe {} with keyframe {}: its transform (scale {:.3f}) puts the matched points at "
+      "{:.2f} "
       "times their own depth (limit {:.2f}){}",
       current.id(), candidate.id(), current_from_candidate.scale, 1.0 / ratio, options_.max_depth_ratio,
       agrees ? "" : "; refused");
@@ -373,20 +387,22 @@ bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const Key
   const LoopCorrectionSize correction = MeasureCorrection(current->camera_from_world(), current_from_world_);
   // The odometry between the two ends (metres in a stereo map): the shortest chain of the links the essential
   // graph holds, so a revisit tracked in the map, an earlier loop or a merge shortens it. Counting the path
-  // driven instead let a look-alike 24 m away pass at the third visit of a place (900 m driven, 30 m allowed).
-  // A monocular map's bound does not use it.
+  // driven instead let a look-alike 24 m away pass at the third visit of a place (900 m driven, 30 m
+  // allowed). A monocular map's bound does not use it.
   constexpr int kEssentialCovisibility = 100;  // as in OptimizeEssentialGraph
   const double odometry =
       options_.fix_scale ? KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility) : 0.0;
   const bool agrees = options_.AllowsCorrection(correction, odometry);
   const std::string what =
       options_.fix_scale
-          ? fmt::format("{} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m of odometry between them (limits "
-                        "{:.1f} m, {:.1f} deg)",
-                        agrees ? "moves" : "refused: it would move", correction.metres, correction.degrees,
-                        odometry, options_.MaxStereoCorrectionM(odometry), options_.MaxRotationDeg(odometry))
-          : fmt::format("{} the keyframe {:.1f} deg (limit {:.1f} deg)", agrees ? "turns" : "refused: it would turn",
-                        correction.degrees, options_.MaxRotationDeg(odometry));
+          ? fmt::format(
+                "{} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m of odometry between them (limits "
+                "{:.1f} m, {:.1f} deg)",
+                agrees ? "moves" : "refused: it would move", correction.metres, correction.degrees, odometry,
+                options_.MaxStereoCorrectionM(odometry), options_.MaxRotationDeg(odometry))
+          : fmt::format("{} the keyframe {:.1f} deg (limit {:.1f} deg)",
+                        agrees ? "turns" : "refused: it would turn", correction.degrees,
+                        options_.MaxRotationDeg(odometry));
   spdlog::info("loop candidate: keyframe {} with keyframe {} {}{}", current->id(), candidate->id(), what,
                agrees ? "" : "; a place that only looks the same");
   return agrees;

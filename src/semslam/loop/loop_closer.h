@@ -24,7 +24,8 @@
 
 namespace semslam {
 
-// The rigid camera_from_world a corrected Sim(3) one stands for: the same camera, its map's scale divided out.
+// The rigid camera_from_world a corrected Sim(3) one stands for: the same camera, its map's scale divided
+// out.
 Rigid3d RigidPose(const Sim3d& camera_from_world);
 
 // How far a loop's correction moves and turns a keyframe: from its pose `before` to the corrected
@@ -77,8 +78,8 @@ struct LoopCloserOptions {
   // A loop within one map may turn the current keyframe by at most this much. Odometry's heading drifts by
   // a few degrees where its length may drift by percents (monocular scale); a look-alike seen across a
   // crossing is off by the angle between the streets (a stereo loop at a corner that would have moved the
-  // keyframe 12 m and turned it 90 degrees passed the length bound). Stereo: the slack plus a rate per 100 m of
-  // odometry, far above the under 1 degree that the true loops measured so far turned their keyframe;
+  // keyframe 12 m and turned it 90 degrees passed the length bound). Stereo: the slack plus a rate per 100 m
+  // of odometry, far above the under 1 degree that the true loops measured so far turned their keyframe;
   // monocular, whose odometry has no metric length: a fixed bound.
   double stereo_rotation_slack_deg = 5.0;
   double max_stereo_rotation_deg_per_100m = 2.0;
@@ -89,8 +90,8 @@ struct LoopCloserOptions {
   // pacing, where tracking waits for the BA: there it would only yield to other processes.
   bool global_ba_low_priority = true;
   int global_ba_iterations = 10;
-  // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map is
-  // adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).
+  // Keyframes one global BA (after a loop, and at the end of a run) optimizes together at most: a larger map
+  // is adjusted in windows, which bounds the solver's memory (mapping/map_optimization.h).
   int global_ba_window_keyframes = 1000;
   bool enabled = true;
 
@@ -130,6 +131,12 @@ class LoopCloser {
   void Join();
 
   void InsertKeyFrame(KeyFrame* keyframe);
+  // What the thread does with a keyframe, in the caller's thread, for a closer not started (merging saved
+  // maps): detection among keyframes of maps other than `excluded_maps`, then verification and correction
+  // (a merge when the place is in another map). Returns whether a loop or merge was made.
+  bool ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps = {});
+  // Forgets the consistency groups of earlier keyframes (before keyframes that do not follow them).
+  void ForgetCandidates();
   // Blocks until the queue is empty and no global BA is running.
   void WaitUntilIdle();
   void Reset();
@@ -140,7 +147,7 @@ class LoopCloser {
 
  private:
   void Run();
-  bool DetectLoop(KeyFrame* current);
+  bool DetectLoop(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps);
   bool ComputeSim3(KeyFrame* current);
   // How many of the current keyframe's best covisibles find loop_points_ where current_from_world_ puts them.
   int CountVerifiedNeighbours(const KeyFrame* current) const;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <unordered_map>
 
 #include "semslam/core/binary_io.h"
@@ -17,12 +18,18 @@ namespace semslam {
 class MapSerializer {
  public:
   static void WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf);
+  // Ids as the file gives them: keyframe, point, session and map ids, each plus its offset (appending).
+  struct IdOffsets {
+    std::uint64_t keyframe = 0, point = 0;
+    std::uint32_t session = 0, map = 0;
+  };
   static std::unique_ptr<KeyFrame> ReadKeyFrame(BinaryReader& r, std::uint32_t version,
-                                                std::uint64_t* parent_id,
+                                                const IdOffsets& offsets, std::uint64_t* parent_id,
                                                 std::vector<std::uint64_t>* loop_ids);
   static void WritePoint(BinaryWriter& w, const MapPoint& p);
-  static void ReadPoint(BinaryReader& r, Map& map,
-                        const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes);
+  // `keyframes` by the file's ids.
+  static MapPoint* ReadPoint(BinaryReader& r, Map& map, const IdOffsets& offsets,
+                             const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes);
   static void SetParent(KeyFrame* kf, KeyFrame* parent) {
     kf->ChangeParent(parent);
     kf->first_connection_ = false;
@@ -194,7 +201,7 @@ void MapSerializer::WriteKeyFrame(BinaryWriter& w, const KeyFrame& kf) {
 }
 
 std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint32_t version,
-                                                      std::uint64_t* parent_id,
+                                                      const IdOffsets& offsets, std::uint64_t* parent_id,
                                                       std::vector<std::uint64_t>* loop_ids) {
   const auto id = r.Get<std::uint64_t>();
   r.set_context(fmt::format("keyframe {}", id));
@@ -255,12 +262,12 @@ std::unique_ptr<KeyFrame> MapSerializer::ReadKeyFrame(BinaryReader& r, std::uint
   Frame frame(frame_id, timestamp,
               MakeFrameData(camera, stereo, std::move(features), std::move(right_u), std::move(depth)));
   frame.SetPose(camera_from_world);
-  auto kf = std::make_unique<KeyFrame>(id, frame);
+  auto kf = std::make_unique<KeyFrame>(id + offsets.keyframe, frame);
   if (has_gps) kf->gps_enu = gps;
   kf->gps_sigma_m = gps_sigma;
   kf->keypoint_labels.Restore(std::move(quantized_labels), std::move(labeled));
-  kf->session_ = session;
-  kf->map_id_ = map_id;
+  kf->session_ = session + offsets.session;
+  kf->map_id_ = map_id + offsets.map;
   kf->map_origin_ = origin;
   return kf;
 }
@@ -282,8 +289,8 @@ void MapSerializer::WritePoint(BinaryWriter& w, const MapPoint& p) {
   w.PutVector(observations);
 }
 
-void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
-                              const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes) {
+MapPoint* MapSerializer::ReadPoint(BinaryReader& r, Map& map, const IdOffsets& offsets,
+                                   const std::unordered_map<std::uint64_t, KeyFrame*>& keyframes) {
   const auto id = r.Get<std::uint64_t>();
   r.set_context(fmt::format("map point {}", id));
   const auto reference_id = r.Get<std::uint64_t>();
@@ -301,7 +308,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
 
   const auto ref = keyframes.find(reference_id);
   if (ref == keyframes.end()) r.Fail(fmt::format("reference keyframe {} does not exist", reference_id));
-  auto point = std::make_unique<MapPoint>(id, position, ref->second);
+  auto point = std::make_unique<MapPoint>(id + offsets.point, position, ref->second);
   point->visible_ = visible;
   point->found_ = found;
   point->labels_ = labels;
@@ -316,6 +323,7 @@ void MapSerializer::ReadPoint(BinaryReader& r, Map& map,
   }
   if (p->observations().empty()) r.Fail("point without observations");
   p->first_keyframe_id_ = p->observations().begin()->first->id();
+  return p;
 }
 
 void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFileContents& extra) {
@@ -355,13 +363,26 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
   file.Commit();
 }
 
-MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
+namespace {
+
+// Reads `path` into `map`: into an empty one as the file has it, or appended to a map that holds keyframes
+// already (every id of the file moved past the map's own; its sessions after the map's).
+MapFileContents ReadIntoMap(const std::filesystem::path& path, Map& map, bool append) {
   const ChecksummedFile file = ReadChecksummedFile(path, kMagic);
   if (file.version < 1 || file.version > kMapFileVersion) {
     throw InputError(path, fmt::format("map file version {} is not supported (this build reads 1 to {})",
                                        file.version, kMapFileVersion));
   }
-  Require(map.NumKeyFrames() == 0, "ReadMapFile needs an empty map");
+  Require(append || map.NumKeyFrames() == 0, "ReadMapFile needs an empty map");
+  MapSerializer::IdOffsets offsets;
+  if (append && map.NumKeyFrames() > 0) {
+    offsets.keyframe = map.next_keyframe_id();
+    offsets.point = map.next_point_id();
+    offsets.session = static_cast<std::uint32_t>(map.sessions().size());
+    offsets.map = map.next_map_id();
+  } else {
+    append = false;
+  }
   BinaryReader r(file.payload, path);
   std::vector<MapSession> sessions = {MapSession{}};
   std::uint32_t active_map = 0, next_map = 1;
@@ -390,36 +411,47 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
       const auto map_id = r.Get<std::uint32_t>();
       r.set_context(fmt::format("camera of map {}", map_id));
       if (map_id >= next_map) r.Fail("the map id is out of range");
-      if (!cameras.empty() && map_id <= cameras.rbegin()->first) r.Fail("the maps are not in id order");
+      if (!cameras.empty() && map_id + offsets.map <= cameras.rbegin()->first)
+        r.Fail("the maps are not in id order");
       MapCamera camera;
       camera.nominal = ReadFullCamera(r);
       camera.camera = ReadFullCamera(r);
       if (camera.camera.width != camera.nominal.width || camera.camera.height != camera.nominal.height)
         r.Fail("the camera and the nominal one have images of different sizes");
-      cameras[map_id] = camera;
+      cameras[map_id + offsets.map] = camera;
     }
   }
   const auto num_keyframes = r.Get<std::uint64_t>();
-  std::unordered_map<std::uint64_t, KeyFrame*> by_id;
-  std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;
+  std::unordered_map<std::uint64_t, KeyFrame*> by_file_id;
+  std::vector<KeyFrame*> keyframes;                                         // read, in the file's (id) order
+  std::vector<std::pair<std::uint64_t, std::vector<std::uint64_t>>> links;  // by the file's ids
   std::uint64_t last_id = 0;
   for (std::uint64_t i = 0; i < num_keyframes; ++i) {
     std::uint64_t parent = kNone;
     std::vector<std::uint64_t> loops;
-    auto kf = MapSerializer::ReadKeyFrame(r, file.version, &parent, &loops);
-    if (kf->session() >= sessions.size()) r.Fail(fmt::format("session {} does not exist", kf->session()));
-    if (kf->map_id() >= next_map) r.Fail(fmt::format("map id {} is out of range", kf->map_id()));
-    if (by_id.count(kf->id())) r.Fail(fmt::format("duplicate keyframe id {}", kf->id()));
+    auto kf = MapSerializer::ReadKeyFrame(r, file.version, offsets, &parent, &loops);
+    const std::uint64_t file_id = kf->id() - offsets.keyframe;
+    if (kf->session() - offsets.session >= sessions.size())
+      r.Fail(fmt::format("session {} does not exist", kf->session() - offsets.session));
+    if (kf->map_id() - offsets.map >= next_map)
+      r.Fail(fmt::format("map id {} is out of range", kf->map_id() - offsets.map));
+    if (by_file_id.count(file_id)) r.Fail(fmt::format("duplicate keyframe id {}", file_id));
     // Written in id order; the links below are matched to keyframes by that order.
-    if (!links.empty() && kf->id() < last_id) r.Fail("keyframes are not in id order");
-    last_id = kf->id();
+    if (!links.empty() && file_id < last_id) r.Fail("keyframes are not in id order");
+    last_id = file_id;
     KeyFrame* k = map.RestoreKeyFrame(std::move(kf));
-    by_id[k->id()] = k;
+    by_file_id[file_id] = k;
+    keyframes.push_back(k);
     links.emplace_back(parent, std::move(loops));
   }
   const auto num_points = r.Get<std::uint64_t>();
-  for (std::uint64_t i = 0; i < num_points; ++i) MapSerializer::ReadPoint(r, map, by_id);
+  std::vector<MapPoint*> points;
+  points.reserve(num_points);
+  for (std::uint64_t i = 0; i < num_points; ++i)
+    points.push_back(MapSerializer::ReadPoint(r, map, offsets, by_file_id));
   MapFileContents contents;
+  contents.first_session = offsets.session;
+  contents.first_map_id = offsets.map;
   r.set_context("extra sections");
   const auto num_extra = r.Get<std::uint64_t>();
   for (std::uint64_t i = 0; i < num_extra; ++i) {
@@ -428,49 +460,72 @@ MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
   }
   if (!r.AtEnd()) r.Fail("trailing bytes");
 
-  map.RestoreSessions(std::move(sessions));
-  map.RestoreMapIds(active_map, next_map);
+  if (append) {
+    std::vector<MapSession> all = map.sessions();
+    for (MapSession& session : sessions) {
+      session.id += offsets.session;
+      all.push_back(std::move(session));
+    }
+    map.RestoreSessions(std::move(all));
+    map.RestoreMapIds(map.active_map_id(), offsets.map + next_map);
+  } else {
+    map.RestoreSessions(std::move(sessions));
+    map.RestoreMapIds(active_map, next_map);
+  }
   // Older files, and maps the file has no camera for: the keyframes' own camera, as they were fitted to it.
-  for (const std::uint32_t map_id : map.MapIds()) {
+  std::set<std::uint32_t> map_ids;
+  for (const KeyFrame* kf : keyframes) map_ids.insert(kf->map_id());
+  for (const std::uint32_t map_id : map_ids) {
     const auto it = cameras.find(map_id);
     contents.cameras[map_id] = it != cameras.end() ? it->second : KeyFrameCameraOfMap(map, map_id);
   }
   // Derived state: covisibility, spanning tree, loop edges, point normals and descriptors.
-  const auto keyframes = map.KeyFrames();
   if (file.version == 1 && !keyframes.empty()) MapSerializer::SetOrigin(keyframes.front());
-  std::unordered_map<std::uint64_t, std::uint64_t> parent_of;
+  std::unordered_map<std::uint64_t, std::uint64_t> parent_of;  // by the file's ids
   for (size_t i = 0; i < keyframes.size(); ++i) {
-    parent_of[keyframes[i]->id()] = links[i].first == kNone ? kNoParent : links[i].first;
+    const std::uint64_t file_id = keyframes[i]->id() - offsets.keyframe;
+    parent_of[file_id] = links[i].first == kNone ? kNoParent : links[i].first;
     for (const auto loop : links[i].second) {
-      if (loop == keyframes[i]->id()) throw InputError(path, fmt::format("keyframe {}: loop edge to itself", loop));
+      if (loop == file_id) throw InputError(path, fmt::format("keyframe {}: loop edge to itself", loop));
     }
   }
   for (const std::uint64_t id : RepairSpanningTree(parent_of, path)) {
-    spdlog::warn("{}: keyframe {} was its own ancestor in the spanning tree (a map file of a semslam before "
-                 "2026-11-28); it is made a root",
-                 path.string(), id);
+    spdlog::warn(
+        "{}: keyframe {} was its own ancestor in the spanning tree (a map file of a semslam before "
+        "2026-11-28); it is made a root",
+        path.string(), id);
   }
   // The stored tree first: UpdateConnections would otherwise choose parents of its own.
   for (KeyFrame* kf : keyframes) {
-    const std::uint64_t parent = parent_of.at(kf->id());
-    MapSerializer::SetParent(kf, parent == kNoParent ? nullptr : by_id.at(parent));
+    const std::uint64_t parent = parent_of.at(kf->id() - offsets.keyframe);
+    MapSerializer::SetParent(kf, parent == kNoParent ? nullptr : by_file_id.at(parent));
   }
   for (size_t i = 0; i < keyframes.size(); ++i) {
     KeyFrame* kf = keyframes[i];
     kf->UpdateConnections();
-    const auto& loops = links[i].second;
-    for (const auto loop : loops) {
-      const auto it = by_id.find(loop);
-      if (it == by_id.end())
-        throw InputError(path, fmt::format("keyframe {}: loop edge to missing {}", kf->id(), loop));
+    for (const auto loop : links[i].second) {
+      const auto it = by_file_id.find(loop);
+      if (it == by_file_id.end())
+        throw InputError(
+            path, fmt::format("keyframe {}: loop edge to missing {}", kf->id() - offsets.keyframe, loop));
       MapSerializer::AddLoopEdge(kf, it->second);
     }
   }
-  for (MapPoint* p : map.MapPoints()) {
+  for (MapPoint* p : points) {
     p->UpdateNormalAndDepth();
     p->UpdateDescriptor();
   }
   return contents;
+}
+
+}  // namespace
+
+MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map) {
+  return ReadIntoMap(path, map, /*append=*/false);
+}
+
+MapFileContents AppendMapFile(const std::filesystem::path& path, Map& map) {
+  return ReadIntoMap(path, map, /*append=*/true);
 }
 
 }  // namespace semslam

@@ -35,6 +35,10 @@ struct MapFileContents {
   // By map id. WriteMapFile writes one per map holding keyframes, from here or, for a map missing here, its
   // first keyframe's camera as both; ReadMapFile gives one per map holding keyframes.
   std::map<std::uint32_t, MapCamera> cameras;
+  // AppendMapFile: where the file's ids went in the map (its session s is now first_session + s, its map m
+  // first_map_id + m). 0 for ReadMapFile.
+  std::uint32_t first_session = 0;
+  std::uint32_t first_map_id = 0;
 };
 
 // Writes the whole map (call with at least a read lock held).
@@ -44,6 +48,10 @@ void WriteMapFile(const std::filesystem::path& path, const Map& map, const MapFi
 // naming the file on a wrong magic, unsupported version, checksum mismatch, truncation or inconsistent
 // references.
 MapFileContents ReadMapFile(const std::filesystem::path& path, Map& map);
+// Reads a map file into a map that may hold others already (sessions of one atlas): every keyframe, point,
+// session and map id of the file is moved past the map's own; `cameras` are by the new map ids. Into an
+// empty map it reads as ReadMapFile. Throws as ReadMapFile.
+MapFileContents AppendMapFile(const std::filesystem::path& path, Map& map);
 
 // The camera a map without a stored one has: its first keyframe's (ideal pinhole) as both. Read lock.
 MapCamera KeyFrameCameraOfMap(const Map& map, std::uint32_t map_id);

@@ -7,7 +7,6 @@
 #include <unordered_map>
 
 #include "semslam/core/error.h"
-#include "semslam/geometry/alignment.h"
 #include "semslam/mapping/map_georeference.h"
 #include "semslam/system/slam_system.h"
 
@@ -19,21 +18,6 @@ void AtlasGeoreferenceOptions::Check() const {
 }
 
 namespace {
-
-// ENU of `to` from ENU of `from`: a rigid transform over a few kilometres (both frames are local tangent
-// planes of one ellipsoid), found from points a kilometre apart.
-Sim3d EnuFromEnu(const EnuFrame& to, const EnuFrame& from) {
-  Points3d in_from, in_to;
-  for (const Eigen::Vector3d& p :
-       {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1000, 0, 0), Eigen::Vector3d(0, 1000, 0),
-        Eigen::Vector3d(0, 0, 1000), Eigen::Vector3d(-1000, -1000, 0)}) {
-    in_from.push_back(p);
-    in_to.push_back(to.ToEnu(from.ToWgs84(p)));
-  }
-  const std::optional<Rigid3d> rigid = AlignRigid3(in_from, in_to);
-  Require(rigid.has_value(), "two ENU frames could not be related");
-  return Sim3d(*rigid);
-}
 
 // Places one map: the fusion's keyframe poses (or the one similarity's), for MoveMapIntoWorld.
 struct Placement {

@@ -2,10 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "semslam/core/atomic_file.h"
+#include "semslam/core/text_reader.h"
+#include "semslam/semantics/class_table.h"
 
 namespace semslam {
 
@@ -70,17 +74,80 @@ nlohmann::json IntrinsicsRefinementJson(const SlamSystem& slam) {
 }
 
 void WriteFramesCsv(const std::filesystem::path& path, const SlamSystem& slam) {
-  const std::uint32_t main = slam.MainMapId();
+  WriteFramesCsv(path, slam.AllFramePoses(), slam.MainMapId());
+}
+
+void WriteFramesCsv(const std::filesystem::path& path, const std::vector<FramePose>& poses,
+                    std::uint32_t main_map) {
   std::string text = "frame,timestamp,map,source,in_main_map,tx,ty,tz,qx,qy,qz,qw\n";
-  for (const FramePose& pose : slam.AllFramePoses()) {
+  for (const FramePose& pose : poses) {
     const Rigid3d& t = pose.world_from_camera;
     text +=
         fmt::format("{},{:.6f},{},{},{},{:.6f},{:.6f},{:.6f},{:.9f},{:.9f},{:.9f},{:.9f}\n", pose.frame_index,
                     pose.timestamp, pose.map_id, pose.predicted ? "predicted" : "tracked",
-                    pose.map_id == main ? 1 : 0, t.translation.x(), t.translation.y(), t.translation.z(),
+                    pose.map_id == main_map ? 1 : 0, t.translation.x(), t.translation.y(), t.translation.z(),
                     t.rotation.x(), t.rotation.y(), t.rotation.z(), t.rotation.w());
   }
   WriteFileAtomically(path, text);
+}
+
+std::vector<FramePose> ReadFramesCsv(const std::filesystem::path& path) {
+  TextReader reader(path);
+  const std::optional<std::string> header = reader.NextLine();
+  if (!header || Trim(*header) != "frame,timestamp,map,source,in_main_map,tx,ty,tz,qx,qy,qz,qw")
+    throw InputError(reader.Where(), "header",
+                     "expected frame,timestamp,map,source,in_main_map,tx,ty,tz,qx,qy,qz,qw");
+  std::vector<FramePose> poses;
+  while (const std::optional<std::string> line = reader.NextLine()) {
+    if (Trim(*line).empty()) continue;
+    const std::vector<std::string_view> f = SplitFields(Trim(*line), ',');
+    const SourceLocation where = reader.Where();
+    if (f.size() != 12)
+      throw InputError(where, "record", fmt::format("expected 12 fields, found {}", f.size()));
+    FramePose& p = poses.emplace_back();
+    const long long frame = ParseInt(f[0], where, "frame");
+    const long long map = ParseInt(f[2], where, "map");
+    if (frame < 0) throw InputError(where, "frame", "must not be negative");
+    if (map < 0 || map > UINT32_MAX) throw InputError(where, "map", "out of range");
+    if (f[3] != "tracked" && f[3] != "predicted")
+      throw InputError(where, "source", "expected tracked or predicted");
+    p.frame_index = static_cast<size_t>(frame);
+    p.timestamp = ParseDouble(f[1], where, "timestamp");
+    p.map_id = static_cast<std::uint32_t>(map);
+    p.predicted = f[3] == "predicted";
+    const Eigen::Vector3d t(ParseDouble(f[5], where, "tx"), ParseDouble(f[6], where, "ty"),
+                            ParseDouble(f[7], where, "tz"));
+    const Eigen::Quaterniond q(ParseDouble(f[11], where, "qw"), ParseDouble(f[8], where, "qx"),
+                               ParseDouble(f[9], where, "qy"), ParseDouble(f[10], where, "qz"));
+    if (std::abs(q.norm() - 1.0) > 1e-3) throw InputError(where, "qx..qw", "not a unit quaternion");
+    p.world_from_camera = Rigid3d(q.normalized(), t);
+  }
+  return poses;
+}
+
+nlohmann::json TimingJson(const TimingRegistry& timing) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& [name, s] : timing.SummarizeAll()) {
+    j[name] = {{"count", s.count},   {"median_ms", s.median_ms}, {"mean_ms", s.mean_ms},
+               {"p95_ms", s.p95_ms}, {"max_ms", s.max_ms},       {"total_ms", s.total_ms}};
+  }
+  return j;
+}
+
+nlohmann::json ClassCountsJson(const ClassCounts& counts) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int c = 0; c < kNumClasses; ++c) j[std::string(ClassKey(c))] = counts[static_cast<size_t>(c)];
+  j["unlabeled"] = counts[kNumClasses];
+  return j;
+}
+
+std::vector<SemanticPoint> SemanticPoints(const Map& map) {
+  auto lock = map.ReadLock();
+  std::vector<SemanticPoint> points;
+  for (const MapPoint* p : map.MapPoints()) {
+    if (!p->is_bad()) points.push_back(ToSemanticPoint(p->position(), p->labels()));
+  }
+  return points;
 }
 
 }  // namespace semslam

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json_fwd.hpp>
 
+#include "semslam/semantics/semantic_outputs.h"
 #include "semslam/system/slam_system.h"
 
 namespace semslam {
@@ -27,5 +28,16 @@ nlohmann::json IntrinsicsRefinementJson(const SlamSystem& slam);
 // of maps never merged into the main one are 0), and the pose in its map (tx ty tz qx qy qz qw,
 // world_from_camera as in TUM files). Written atomically.
 void WriteFramesCsv(const std::filesystem::path& path, const SlamSystem& slam);
+// The same for given poses (in_main_map: map_id == main_map).
+void WriteFramesCsv(const std::filesystem::path& path, const std::vector<FramePose>& poses,
+                    std::uint32_t main_map);
+// Reads what WriteFramesCsv wrote (predicted frames marked). Throws InputError naming the file and line.
+std::vector<FramePose> ReadFramesCsv(const std::filesystem::path& path);
+// run.json's "classes": map points per class (by class key) and "unlabeled".
+nlohmann::json ClassCountsJson(const ClassCounts& counts);
+// timing.json: per timer {count, median_ms, mean_ms, p95_ms, max_ms, total_ms}.
+nlohmann::json TimingJson(const TimingRegistry& timing);
+// Every good map point of the atlas, with its label.
+std::vector<SemanticPoint> SemanticPoints(const Map& map);
 
 }  // namespace semslam

@@ -85,31 +85,6 @@ size_t CheckFrameRange(const ImageSequence& sequence, size_t first, size_t end, 
 
 namespace {
 
-nlohmann::json TimingJson(const TimingRegistry& timing) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& [name, s] : timing.SummarizeAll()) {
-    j[name] = {{"count", s.count},   {"median_ms", s.median_ms}, {"mean_ms", s.mean_ms},
-               {"p95_ms", s.p95_ms}, {"max_ms", s.max_ms},       {"total_ms", s.total_ms}};
-  }
-  return j;
-}
-
-std::vector<SemanticPoint> SemanticPoints(const Map& map) {
-  auto lock = map.ReadLock();
-  std::vector<SemanticPoint> points;
-  for (const MapPoint* p : map.MapPoints()) {
-    if (!p->is_bad()) points.push_back(ToSemanticPoint(p->position(), p->labels()));
-  }
-  return points;
-}
-
-nlohmann::json ClassCountsJson(const ClassCounts& counts) {
-  nlohmann::json j = nlohmann::json::object();
-  for (int c = 0; c < kNumClasses; ++c) j[std::string(ClassKey(c))] = counts[static_cast<size_t>(c)];
-  j["unlabeled"] = counts[kNumClasses];
-  return j;
-}
-
 nlohmann::json AccuracyJson(const ClassAccuracyCounts& counts) {
   nlohmann::json per_class = nlohmann::json::object();
   for (int c = 0; c < kNumClasses; ++c) {

@@ -249,6 +249,25 @@ MapFileContents SlamSystem::LoadMap(const std::filesystem::path& path) {
   return contents;
 }
 
+MapFileContents SlamSystem::AppendMap(const std::filesystem::path& path) {
+  Require(frames_ == 0, "a map can only be appended before the first frame");
+  auto lock = map_->WriteLock();
+  MapFileContents contents = AppendMapFile(path, *map_);
+  size_t keyframes = 0;
+  for (KeyFrame* kf : map_->KeyFrames()) {
+    if (kf->has_bow) continue;
+    vocabulary_->Transform(kf->features().descriptors, &kf->bow, &kf->feature_vector);
+    kf->has_bow = true;
+    database_->Add(kf->id(), kf->bow);
+    ++keyframes;
+  }
+  for (const auto& [map_id, camera] : contents.cameras) map_cameras_[map_id] = camera;
+  spdlog::info("map {} appended: {} keyframes in {} sessions (the atlas: {} keyframes, {} maps)",
+               path.string(), keyframes, map_->sessions().size() - contents.first_session,
+               map_->NumKeyFrames(), map_->MapIds().size());
+  return contents;
+}
+
 MapCamera SlamSystem::SessionCamera() const {
   if (tracking_camera_.map_id) return map_cameras_.at(*tracking_camera_.map_id);
   return {camera_, camera_};
@@ -434,7 +453,8 @@ void SlamSystem::Finish() {
           map_cameras_[map_id] = {map_camera.nominal, r.refined};
           spdlog::info(
               "map {}: the final bundle adjustment refined the intrinsics, which become the map's camera: "
-              "f {:.1f} -> {:.1f}, principal point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 {:.4f}; "
+              "f {:.1f} -> {:.1f}, principal point ({:.1f}, {:.1f}) -> ({:.1f}, {:.1f}), k1 {:.4f}, k2 "
+              "{:.4f}; "
               "cost {:.0f} -> {:.0f}",
               map_id, r.nominal.fx, r.refined.fx, r.nominal.cx, r.nominal.cy, r.refined.cx, r.refined.cy,
               r.refined.distortion.k1, r.refined.distortion.k2, r.plain_cost, r.refined_cost);

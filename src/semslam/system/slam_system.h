@@ -132,6 +132,10 @@ class SlamSystem {
   // by relocalizing (in any of its maps), with the camera ChooseTrackingCamera gives (a warning when the
   // sequence's camera is another sensor than the map's).
   MapFileContents LoadMap(const std::filesystem::path& path);
+  // Adds a saved map's sessions and maps to this system's atlas, beside those it holds
+  // (system/session_merge.h: maps of several drives merged into one); before the first frame, for a system
+  // that tracks no frames.
+  MapFileContents AppendMap(const std::filesystem::path& path);
   // The camera frames are undistorted with, and why.
   const TrackingCameraChoice& tracking_camera() const { return tracking_camera_; }
   // The camera of each map holding keyframes, as SaveMap writes it: a loaded map's, a refinement the final BA
@@ -190,6 +194,7 @@ class SlamSystem {
   Map& map() { return *map_; }
   const Map& map() const { return *map_; }
   LocalMapper& mapper() { return *mapper_; }
+  LoopCloser& loop_closer() { return *loop_closer_; }
   const Vocabulary& vocabulary() const { return *vocabulary_; }
   TimingRegistry& timing() { return timing_; }
   const SlamOptions& options() const { return options_; }

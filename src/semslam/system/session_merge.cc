@@ -1,0 +1,626 @@
+#include "semslam/system/session_merge.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <unordered_map>
+
+#include "semslam/core/atomic_file.h"
+#include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
+#include "semslam/core/log_file.h"
+#include "semslam/core/progress.h"
+#include "semslam/core/timing.h"
+#include "semslam/eval/trajectory_metrics.h"
+#include "semslam/io/sequence.h"
+#include "semslam/io/trajectory_io.h"
+#include "semslam/landmarks/catalogue.h"
+#include "semslam/loop/loop_closer.h"
+#include "semslam/map/map_file.h"
+#include "semslam/mapping/map_georeference.h"
+#include "semslam/report/geo_evaluation.h"
+#include "semslam/report/geo_outputs.h"
+#include "semslam/report/html_report.h"
+#include "semslam/sim/scene_file.h"
+#include "semslam/system/atlas_outputs.h"
+#include "semslam/system/run_output_dir.h"
+#include "semslam/system/slam_system.h"
+
+namespace semslam {
+
+namespace fs = std::filesystem;
+
+void SessionMergeOptions::Check() const {
+  Require(!runs.empty(), "merge: no run folder given");
+  Require(!output.empty(), "merge: no output folder given");
+  Require(global_ba_iterations > 0, "merge: global_ba_iterations must be positive");
+  Require(global_ba_window_keyframes >= 2, "merge: global_ba_window_keyframes must be >= 2");
+}
+
+namespace {
+
+// A session of an input whose frames are known (a run's own drive, or a drive an earlier merge wrote).
+struct InputSession {
+  std::string sequence;  // its sequence folder, for the ground truth
+  std::string camera;
+  fs::path frames_csv;  // each frame's map and pose in it, as the input's map holds them
+};
+
+// One run folder given to merge.
+struct InputRun {
+  fs::path dir;
+  std::string mode;  // "mono" or "stereo"
+  std::vector<fs::path> catalogues;
+  // By session index in the input's map file; a run's own session is its file's last (kLastSession).
+  std::map<std::uint32_t, InputSession> sessions;
+};
+constexpr std::uint32_t kLastSession = UINT32_MAX;
+
+nlohmann::json ReadJsonFile(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot be read (is this a semslam run folder?)");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, fmt::format("malformed JSON: {}", e.what()));
+  }
+}
+
+InputRun ReadInputRun(const fs::path& dir) {
+  InputRun run;
+  run.dir = fs::absolute(dir);
+  if (!fs::is_regular_file(dir / "map.semslam"))
+    throw InputError(dir / "map.semslam", "missing: the run saved no map (run it without --no-save-map)");
+  const fs::path json_path = dir / "run.json";
+  const nlohmann::json j = ReadJsonFile(json_path);
+  try {
+    run.mode = j.at("mode").get<std::string>();
+    if (run.mode != "mono" && run.mode != "stereo")
+      throw InputError(json_path, "mode: expected mono or stereo");
+    if (j.value("command", std::string("run")) == "merge") {
+      for (const auto& c : j.value("landmark_catalogues", nlohmann::json::array()))
+        run.catalogues.emplace_back(c.get<std::string>());
+      for (const auto& s : j.at("maps").at("sessions")) {
+        if (!s.contains("frames_csv")) continue;
+        run.sessions[s.at("id").get<std::uint32_t>()] = {s.value("sequence", std::string()),
+                                                         s.value("camera", std::string()),
+                                                         run.dir / s.at("frames_csv").get<std::string>()};
+      }
+    } else {
+      const std::string landmarks = j.at("config").value("landmarks", std::string());
+      if (!landmarks.empty()) run.catalogues.emplace_back(landmarks);
+      if (fs::is_regular_file(dir / "frames.csv")) {
+        run.sessions[kLastSession] = {j.at("sequence").get<std::string>(), j.value("camera", std::string()),
+                                      run.dir / "frames.csv"};
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(json_path, fmt::format("not a run's run.json: {}", e.what()));
+  }
+  return run;
+}
+
+// The keyframes of one session in one map as the input held them, to carry its frames through every move the
+// merge makes (frames follow the keyframe nearest in frame index, as in a run).
+struct Anchor {
+  KeyFrame* keyframe = nullptr;
+  Rigid3d world_from_keyframe;  // as loaded
+  double scale_correction = 1.0;
+};
+using AnchorsByFrame = std::map<std::uint64_t, Anchor>;  // by frame index
+
+// A frame's pose now: moved with its anchor keyframe (rigidly, and scaled by the keyframe's scale change).
+std::optional<FramePose> FollowAnchor(const AnchorsByFrame& anchors, const FramePose& frame) {
+  const Anchor* best = nullptr;
+  std::uint64_t best_gap = UINT64_MAX;
+  for (auto it = anchors.lower_bound(frame.frame_index);; --it) {
+    if (it != anchors.end() && !it->second.keyframe->is_bad()) {
+      const std::uint64_t gap =
+          it->first > frame.frame_index ? it->first - frame.frame_index : frame.frame_index - it->first;
+      if (gap < best_gap) {
+        best_gap = gap;
+        best = &it->second;
+      }
+      if (it->first <= frame.frame_index) break;
+    }
+    if (it == anchors.begin()) break;
+  }
+  if (best == nullptr) return std::nullopt;
+  const KeyFrame& kf = *best->keyframe;
+  const double scale = kf.scale_correction() / best->scale_correction;
+  const Sim3d now_from_loaded = Sim3d(kf.world_from_camera()) *
+                                Sim3d(scale, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero()) *
+                                Sim3d(best->world_from_keyframe).Inverse();
+  FramePose moved = frame;
+  moved.world_from_camera = now_from_loaded.TransformPose(frame.world_from_camera);
+  moved.map_id = kf.map_id();
+  return moved;
+}
+
+// What one session of the atlas is, and where its frames are.
+struct SessionRecord {
+  std::uint32_t id = 0;
+  fs::path run;
+  std::uint32_t first_map_id = 0;  // where its input's map ids went in the atlas
+  std::optional<InputSession> input;
+  std::map<std::uint32_t, AnchorsByFrame> anchors;  // by the map id the keyframes had when loaded
+  std::vector<FramePose> frames;                    // moved, after the merge
+};
+
+std::string SessionFolderName(const MapSession& s) {
+  std::string name = s.name.empty() ? std::string("session") : s.name;
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  }
+  return fmt::format("{:03d}-{}", s.id, name);
+}
+
+// Catalogues of all runs, each landmark once (same name within a metre).
+std::vector<Landmark> UnionOfCatalogues(const std::vector<fs::path>& paths) {
+  std::vector<Landmark> out;
+  std::set<fs::path> seen;
+  for (const fs::path& path : paths) {
+    if (!seen.insert(fs::absolute(path)).second) continue;
+    for (Landmark& l : ReadLandmarks(path)) {
+      const bool duplicate = std::any_of(out.begin(), out.end(), [&](const Landmark& o) {
+        const double north = (o.position.latitude_deg - l.position.latitude_deg) * 111320.0;
+        const double east = (o.position.longitude_deg - l.position.longitude_deg) * 111320.0 *
+                            std::cos(l.position.latitude_deg * M_PI / 180.0);
+        return o.name == l.name && std::hypot(north, east) < 1.0;
+      });
+      if (!duplicate) out.push_back(std::move(l));
+    }
+  }
+  return out;
+}
+
+// A drive's ground truth, in its town's ENU frame when it has one (the synthetic city's scene.json: every
+// drive of a town in one frame), else in its sequence's own frame.
+struct SessionTruth {
+  Trajectory world_from_camera;
+  std::optional<EnuFrame> enu;  // the frame of world_from_camera, when it is the town's ENU
+};
+
+std::optional<SessionTruth> TruthOf(const InputSession& session, bool stereo) {
+  try {
+    SequenceOptions options;
+    options.camera = session.camera;
+    options.stereo = stereo;
+    std::optional<Trajectory> truth = OpenSequence(session.sequence, options)->GroundTruth();
+    if (!truth) return std::nullopt;
+    SessionTruth out{std::move(*truth), std::nullopt};
+    if (const auto scene = sim::FindSceneJson(session.sequence)) {
+      const SceneTruth town = ReadSceneTruth(scene->parent_path());
+      for (StampedPose& p : out.world_from_camera)
+        p.world_from_camera = town.enu_from_world * p.world_from_camera;
+      out.enu = EnuFrame(town.origin);
+    }
+    return out;
+  } catch (const std::exception& e) {
+    spdlog::warn("no ground truth for {}: {}", session.sequence, e.what());
+    return std::nullopt;
+  }
+}
+
+Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_id,
+                        double time_offset = 0.0) {
+  Trajectory t;
+  for (const FramePose& f : frames) {
+    if (f.map_id == map_id && !f.predicted) t.push_back({f.timestamp + time_offset, f.world_from_camera});
+  }
+  return t;
+}
+
+}  // namespace
+
+SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
+  options.Check();
+  Stopwatch watch;
+  std::vector<InputRun> runs;
+  for (const fs::path& dir : options.runs) runs.push_back(ReadInputRun(dir));
+  for (const InputRun& r : runs) {
+    if (r.mode != runs.front().mode) {
+      throw InvalidArgument(
+          fmt::format("merge: {} holds a {} map and {} a {} one; monocular and stereo maps are not "
+                      "merged",
+                      runs.front().dir.string(), runs.front().mode, r.dir.string(), r.mode));
+    }
+  }
+  const bool stereo = runs.front().mode == "stereo";
+  OutputDirOptions output_dir_options;
+  output_dir_options.overwrite = options.overwrite;
+  output_dir_options.command = "merge";
+  const RunOutputDir output_dir(options.output, output_dir_options);
+  const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
+
+  // The system that holds the atlas: its camera and rig are the first map's (it tracks no frame).
+  PinholeCamera camera;
+  std::optional<StereoRig> rig;
+  {
+    Map first;
+    const MapFileContents contents = ReadMapFile(runs.front().dir / "map.semslam", first);
+    auto lock = first.ReadLock();
+    const KeyFrame* kf = first.KeyFrames().front();
+    camera = contents.cameras.begin()->second.camera;
+    rig = kf->data().stereo;
+  }
+  SlamOptions slam_options;
+  slam_options.mode = stereo ? SensorMode::kStereo : SensorMode::kMonocular;
+  slam_options.pacing = Pacing::kSynchronous;
+  slam_options.vocabulary = options.vocabulary;
+  slam_options.loop.global_ba = false;  // one at the end, over every merged map
+  slam_options.loop.global_ba_window_keyframes = options.global_ba_window_keyframes;
+  slam_options.final_global_ba = options.global_ba;
+  slam_options.final_global_ba_iterations = options.global_ba_iterations;
+  slam_options.final_refine_intrinsics = false;  // each map keeps the camera its run fitted
+  if (stereo && !rig)
+    throw InputError(runs.front().dir / "map.semslam", "a stereo run's map holds no stereo keyframe");
+  SlamSystem slam(slam_options, camera, stereo ? rig : std::nullopt);
+  Map& map = slam.map();
+
+  // 1. The atlas, and where each session's frames are.
+  std::vector<SessionRecord> sessions;
+  std::map<std::uint32_t, Georeference> in_world;  // by map id, as each run placed it
+  std::vector<fs::path> catalogues;
+  for (const InputRun& run : runs) {
+    const MapFileContents contents = slam.AppendMap(run.dir / "map.semslam");
+    auto lock = map.ReadLock();
+    const std::uint32_t first_session = contents.first_session;
+    const std::uint32_t last_session = static_cast<std::uint32_t>(map.sessions().size() - 1);
+    for (std::uint32_t s = first_session; s <= last_session; ++s) {
+      SessionRecord& record = sessions.emplace_back();
+      record.id = s;
+      record.run = run.dir;
+      record.first_map_id = contents.first_map_id;
+      const std::uint32_t in_file = s - first_session;
+      if (auto it = run.sessions.find(in_file); it != run.sessions.end()) record.input = it->second;
+      if (auto it = run.sessions.find(kLastSession); it != run.sessions.end() && s == last_session)
+        record.input = it->second;
+    }
+    for (KeyFrame* kf : map.KeyFrames()) {
+      if (kf->session() < first_session) continue;
+      sessions[kf->session()].anchors[kf->map_id()][kf->frame_id()] = {kf, kf->world_from_camera(),
+                                                                       kf->scale_correction()};
+    }
+    if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
+      std::uint32_t largest = contents.first_map_id;
+      size_t most = 0;
+      for (const std::uint32_t id : map.MapIds()) {
+        if (id >= contents.first_map_id && map.NumKeyFramesOfMap(id) > most) {
+          most = map.NumKeyFramesOfMap(id);
+          largest = id;
+        }
+      }
+      const GeoContext geo = ParseGeoSection(
+          it->second, fs::path((run.dir / "map.semslam").string() + "#geo"), largest - contents.first_map_id);
+      for (const auto& [id, georeference] : geo.maps)
+        in_world.emplace(id + contents.first_map_id, georeference);
+    }
+    catalogues.insert(catalogues.end(), run.catalogues.begin(), run.catalogues.end());
+  }
+  for (const SessionRecord& s : sessions) {
+    if (!s.input)
+      spdlog::info("session {} ({}): no frames of its own are known, only its keyframes", s.id,
+                   map.sessions()[s.id].name);
+  }
+
+  // 2. One world frame for every map a run placed in it.
+  std::optional<EnuFrame> world;
+  std::set<std::uint32_t> world_maps;
+  for (const auto& [map_id, georeference] : in_world) {
+    if (!world) world = georeference.enu_frame;
+    const Sim3d world_from_map = EnuFromEnu(*world, georeference.enu_frame) * georeference.enu_from_map;
+    auto lock = map.WriteLock();
+    if (map.NumKeyFramesOfMap(map_id) == 0) continue;
+    MoveMapIntoWorld(map, map_id, {}, world_from_map);
+    world_maps.insert(map_id);
+    spdlog::info("map {} is in the world (its run's GPS placement){}", map_id,
+                 georeference.local ? "; its per-keyframe corrections are left out" : "");
+  }
+
+  // 3. Place recognition across maps.
+  std::string status = "ok";
+  size_t place_merges = 0;
+  if (options.place_recognition) {
+    std::vector<std::uint32_t> map_ids;
+    size_t to_examine = 0;
+    {
+      auto lock = map.ReadLock();
+      map_ids = map.MapIds();
+      to_examine = map.NumKeyFrames();
+    }
+    ProgressReporter progress("merge", to_examine, options.show_progress);
+    size_t examined = 0;
+    // Until a pass over every map merges nothing (a map merged late may hold the place another one needs).
+    for (bool merged = true; merged && map_ids.size() > 1 && status == "ok";) {
+      merged = false;
+      std::stable_partition(map_ids.begin(), map_ids.end(),
+                            [&](std::uint32_t id) { return !world_maps.count(id); });
+      for (const std::uint32_t map_id : map_ids) {
+        std::vector<KeyFrame*> keyframes;
+        std::set<std::uint32_t> excluded = {map_id};
+        {
+          auto lock = map.ReadLock();
+          keyframes = map.KeyFramesOfMap(map_id);
+          if (world_maps.count(map_id)) {
+            for (const std::uint32_t other : map.MapIds()) {
+              if (!world_maps.count(other)) excluded.insert(other);
+            }
+          }
+        }
+        slam.loop_closer().ForgetCandidates();
+        for (KeyFrame* kf : keyframes) {
+          if (InterruptRequested()) {
+            status = "interrupted";
+            break;
+          }
+          progress.Update(std::min(++examined, to_examine),
+                          fmt::format("map {}, {} merges", map_id, place_merges));
+          if (kf->is_bad() || !slam.loop_closer().ProcessKeyFrame(kf, excluded)) continue;
+          ++place_merges;
+          merged = true;
+          if (world_maps.erase(map_id)) world_maps.insert(kf->map_id());
+          break;
+        }
+        if (merged || status != "ok") break;
+      }
+      auto lock = map.ReadLock();
+      map_ids = map.MapIds();
+    }
+    progress.Finish(fmt::format("{} maps merged by place recognition", place_merges));
+  }
+
+  // 4. The final bundle adjustment of each map.
+  slam.Finish();
+
+  // 5. Maps in the world that no place tied: joined by their GPS placement.
+  size_t gps_joins = 0;
+  nlohmann::json joins = nlohmann::json::array();
+  std::optional<std::uint32_t> world_main;
+  {
+    auto lock = map.WriteLock();
+    for (const std::uint32_t id : map.MapIds()) {
+      if (!world_maps.count(id)) continue;
+      if (!world_main || map.NumKeyFramesOfMap(id) > map.NumKeyFramesOfMap(*world_main)) world_main = id;
+    }
+    for (const std::uint32_t id : map.MapIds()) {
+      if (!world_maps.count(id) || id == *world_main) continue;
+      map.MergeMapInto(id, *world_main);
+      ++gps_joins;
+      joins.push_back({{"map", id}, {"into", *world_main}});
+      spdlog::info("map {} joined map {} in the world through the GPS", id, *world_main);
+    }
+  }
+
+  // 6. Outputs.
+  std::uint32_t main_map = 0;
+  size_t num_keyframes = 0, num_points = 0, num_maps = 0;
+  {
+    auto lock = map.ReadLock();
+    main_map = world_main.value_or(map.MapWithMostKeyFrames());
+    num_keyframes = map.NumKeyFrames();
+    num_points = map.NumMapPoints();
+    num_maps = map.MapIds().size();
+  }
+  const std::optional<Georeference> georeference =
+      world_main ? std::optional<Georeference>(Georeference(*world, Sim3d())) : std::nullopt;
+  const Alignment alignment = stereo ? Alignment::kSe3 : Alignment::kSim3;
+  nlohmann::json session_json = nlohmann::json::array();
+  GeoInputs geo;
+  // Trajectories against their truth, for one alignment of the whole city: each session shifted in time
+  // past the others.
+  Trajectory city_estimate, city_truth;
+  std::vector<std::pair<size_t, Trajectory>> session_estimates;  // index into session_json
+  std::vector<Trajectory> session_truths;
+  {
+    auto lock = map.ReadLock();
+    for (size_t k = 0; k < sessions.size(); ++k) {
+      SessionRecord& s = sessions[k];
+      const MapSession& info = map.sessions()[s.id];
+      const fs::path folder = fs::path("sessions") / SessionFolderName(info);
+      fs::create_directories(options.output / folder);
+      nlohmann::json j = {
+          {"id", s.id}, {"name", info.name}, {"source", info.source}, {"run", s.run.string()}};
+      std::vector<FramePose> keyframes;
+      for (const auto& [loaded_map, anchors] : s.anchors) {
+        for (const auto& [frame, anchor] : anchors) {
+          if (anchor.keyframe->is_bad()) continue;
+          keyframes.push_back({frame, static_cast<long long>(anchor.keyframe->id()),
+                               anchor.keyframe->timestamp(), anchor.keyframe->world_from_camera(),
+                               anchor.keyframe->map_id(), false});
+        }
+      }
+      std::sort(keyframes.begin(), keyframes.end(),
+                [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+      size_t unanchored = 0;
+      if (s.input) {
+        for (const FramePose& f : ReadFramesCsv(s.input->frames_csv)) {
+          const auto anchors = s.anchors.find(f.map_id + s.first_map_id);
+          const std::optional<FramePose> moved =
+              anchors != s.anchors.end() ? FollowAnchor(anchors->second, f) : std::nullopt;
+          if (moved) {
+            s.frames.push_back(*moved);
+          } else {
+            ++unanchored;
+          }
+        }
+      } else {
+        s.frames = keyframes;  // nothing finer is known
+      }
+      std::map<std::uint32_t, size_t> frames_per_map;
+      for (const FramePose& f : s.frames) ++frames_per_map[f.map_id];
+      const size_t in_main = frames_per_map.count(main_map) ? frames_per_map.at(main_map) : 0;
+      j["frames"] = s.frames.size();
+      j["frames_in_main_map"] = in_main;
+      j["frames_without_keyframe"] = unanchored;
+      j["keyframes"] = keyframes.size();
+      j["in_main_map"] = in_main > 0 && in_main == s.frames.size();
+      nlohmann::json per_map = nlohmann::json::object();
+      for (const auto& [id, n] : frames_per_map) per_map[std::to_string(id)] = n;
+      j["frames_per_map"] = per_map;
+      if (s.input) {
+        j["sequence"] = s.input->sequence;
+        j["camera"] = s.input->camera;
+      }
+      const Trajectory trajectory = ToTrajectory(s.frames, main_map);
+      WriteTumTrajectory(options.output / folder / "trajectory.tum", trajectory);
+      WriteTumTrajectory(options.output / folder / "keyframes.tum", ToTrajectory(keyframes, main_map));
+      WriteFramesCsv(options.output / folder / "frames.csv", s.frames, main_map);
+      j["trajectory"] = (folder / "trajectory.tum").string();
+      j["frames_csv"] = (folder / "frames.csv").string();
+      if (georeference && in_main > 0) {
+        std::string text = "t,lat,lon,alt\n";
+        for (const StampedPose& p : trajectory) {
+          const Wgs84 w = georeference->MapToWgs84(p.world_from_camera.translation);
+          text += fmt::format("{:.6f},{:.9f},{:.9f},{:.3f}\n", p.timestamp, w.latitude_deg, w.longitude_deg,
+                              w.altitude_m);
+        }
+        WriteFileAtomically(options.output / folder / "trajectory_wgs84.csv", text);
+        j["trajectory_wgs84"] = (folder / "trajectory_wgs84.csv").string();
+      }
+      if (s.input && trajectory.size() >= 3) {
+        if (const std::optional<SessionTruth> truth = TruthOf(*s.input, stereo)) {
+          try {
+            const AteResult ate = ComputeAte(trajectory, truth->world_from_camera, alignment);
+            j["ate_rmse"] = ate.rmse;
+            j["ate_matched"] = ate.matched;
+            const double shift = 1e6 * static_cast<double>(session_estimates.size() + 1);
+            for (StampedPose p : trajectory)
+              city_estimate.push_back({p.timestamp + shift, p.world_from_camera});
+            for (StampedPose p : truth->world_from_camera)
+              city_truth.push_back({p.timestamp + shift, p.world_from_camera});
+            session_estimates.emplace_back(session_json.size(), trajectory);
+            session_truths.push_back(truth->world_from_camera);
+            if (georeference && truth->enu) {
+              // Where the merged map puts the drive in the world, against where it was: no alignment.
+              Trajectory in_town = trajectory;
+              for (StampedPose& p : in_town) {
+                p.world_from_camera.translation =
+                    truth->enu->ToEnu(georeference->MapToWgs84(p.world_from_camera.translation));
+              }
+              j["world_rmse_m"] = ComputeAte(in_town, truth->world_from_camera, Alignment::kNone).rmse;
+            }
+          } catch (const EvaluationError& e) {
+            spdlog::warn("session {}: no ATE: {}", s.id, e.what());
+          }
+        }
+      }
+      session_json.push_back(std::move(j));
+      // The city's frames for the geographic outputs: the drives one after another, in frame-index ranges of
+      // their own.
+      if (in_main > 0) {
+        const size_t offset = k * 10'000'000;
+        for (FramePose f : s.frames) {
+          if (f.map_id != main_map || f.predicted) continue;
+          f.frame_index += offset;
+          geo.frames.push_back(f);
+        }
+        for (FramePose f : keyframes) {
+          if (f.map_id != main_map) continue;
+          f.frame_index += offset;
+          geo.keyframes.push_back(f);
+        }
+      }
+    }
+  }
+  // One alignment of every drive's trajectory together: how far each lies from the others in the merged map.
+  std::optional<double> city_ate;
+  if (session_estimates.size() >= 1) {
+    try {
+      const AteResult city = ComputeAte(city_estimate, city_truth, alignment);
+      city_ate = city.rmse;
+      for (size_t i = 0; i < session_estimates.size(); ++i) {
+        Trajectory aligned = session_estimates[i].second;
+        for (StampedPose& p : aligned)
+          p.world_from_camera = city.truth_from_estimate.TransformPose(p.world_from_camera);
+        session_json[session_estimates[i].first]["ate_rmse_city"] =
+            ComputeAte(aligned, session_truths[i], Alignment::kNone).rmse;
+      }
+    } catch (const EvaluationError& e) {
+      spdlog::warn("no city ATE: {}", e.what());
+    }
+  }
+
+  // Semantic map, landmarks, topology, objects, plots.
+  const std::vector<SemanticPoint> semantic_points = SemanticPoints(map);
+  WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
+  geo.map_id = main_map;
+  geo.monocular = !stereo;
+  {
+    auto lock = map.ReadLock();
+    for (const MapPoint* p : map.MapPointsOfMap(main_map)) {
+      const SemanticPoint sp = ToSemanticPoint(p->position(), p->labels());
+      if (IsValidTrainId(sp.label)) geo.points.push_back({sp.position, sp.label, sp.confidence});
+    }
+  }
+  if (georeference && !geo.frames.empty()) {
+    GeoInputs::Placed placed{*georeference};
+    for (const FramePose& f : geo.frames)
+      placed.single_similarity_enu.push_back(f.world_from_camera.translation);
+    geo.placed = std::move(placed);
+    if (!catalogues.empty()) geo.landmarks = UnionOfCatalogues(catalogues);
+  }
+  const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, {});
+  MapFileContents map_sections;
+  map_sections.extra_sections = geo_outputs.map_sections;
+  slam.SaveMap(options.output / "map.semslam", map_sections);
+
+  nlohmann::json merge_events = nlohmann::json::array();
+  for (const LoopEvent& e : slam.Merges()) {
+    nlohmann::json event = LoopEventJson(e);
+    event["map"] = e.map_id;
+    event["into"] = e.matched_map_id;
+    merge_events.push_back(std::move(event));
+  }
+  nlohmann::json catalogue_json = nlohmann::json::array();
+  for (const fs::path& c : catalogues) catalogue_json.push_back(fs::absolute(c).string());
+  nlohmann::json run_json = {
+      {"command", "merge"},
+      {"status", status},
+      {"mode", stereo ? "stereo" : "mono"},
+      {"runs", nlohmann::json::array()},
+      {"keyframes", num_keyframes},
+      {"points", num_points},
+      {"landmark_catalogues", catalogue_json},
+      {"seconds", watch.ElapsedSeconds()},
+      {"peak_rss_mib", PeakRssMiB()},
+  };
+  for (const InputRun& r : runs) run_json["runs"].push_back(r.dir.string());
+  run_json["maps"] = {{"count", num_maps},
+                      {"main_map", main_map},
+                      {"place_merges", place_merges},
+                      {"merge_events", merge_events},
+                      {"gps_joins", joins},
+                      {"sessions", session_json}};
+  if (city_ate) run_json["ate_rmse_city"] = *city_ate;
+  run_json["ate_alignment"] = AlignmentName(alignment);
+  run_json["classes"] = ClassCountsJson(CountLabels(semantic_points));
+  run_json["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
+  run_json["provenance"] = ProvenanceJson(options.provenance);
+  WriteFileAtomically(options.output / "run.json", run_json.dump(2) + "\n");
+  WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
+  try {
+    WriteHtmlReport(options.output);
+  } catch (const std::exception& e) {
+    spdlog::warn("no report: {}", e.what());
+  }
+  spdlog::info(
+      "merged {} sessions of {} runs: {} maps left, {} merged by place recognition, {} joined by GPS",
+      sessions.size(), runs.size(), num_maps, place_merges, gps_joins);
+
+  SessionMergeSummary summary;
+  summary.sessions = sessions.size();
+  summary.maps = num_maps;
+  summary.place_merges = place_merges;
+  summary.gps_joins = gps_joins;
+  summary.seconds = watch.ElapsedSeconds();
+  return summary;
+}
+
+}  // namespace semslam
