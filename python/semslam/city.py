@@ -136,6 +136,7 @@ class Progress:
         self.stream = stream
         self.events: "queue.Queue[dict]" = queue.Queue()
         self.ended = set()  # labels reported done or failed: a late start event of theirs is not news
+        self.starts = {}  # label -> how many times it started (a task is run again when its worker died or it failed)
 
     def line(self, text: str) -> None:
         print(text, file=self.stream, flush=True)
@@ -152,7 +153,9 @@ class Progress:
                 return
             label = f"{msg.get('kind')} {msg.get('name')}"
             if label in labels.values() and label not in self.ended:
-                self.line(f"  {label}: running on {msg.get('worker')} (pid {msg.get('pid')})")
+                n = self.starts[label] = self.starts.get(label, 0) + 1
+                again = f", attempt {n}" if n > 1 else ""
+                self.line(f"  {label}: running on {msg.get('worker')} (pid {msg.get('pid')}{again})")
 
 
 def build_graph(client, drives: List[Drive], out: str, semslam: str, run_args: List[str], group: int, token: str):
@@ -208,6 +211,7 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
     for d in drives:
         progress.line(f"  drive {d.name}: queued ({d.sequence})")
     drive_errors, merge_errors = [], []
+    order = {f.key: i for i, f in enumerate(futures)}
     pending = as_completed(futures, with_results=False)
     while not pending.is_empty():
         # Completions first: a task's start event can arrive before its inputs' completions were handled.
@@ -223,14 +227,17 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
                 drive_errors.append(str(f.exception()))
                 progress.line(f"  {label}: FAILED: {f.exception()}")
             else:
-                merge_errors.append((label, str(f.exception())))
+                merge_errors.append((order[f.key], label, str(f.exception())))
         progress.drain(labels)
         if not batch:
             time.sleep(0.2)
     progress.drain(labels)
-    for label, err in merge_errors:
-        # A merge whose input failed fails with that input's error, reported above.
-        progress.line(f"  {label}: not done (a drive failed)" if err in drive_errors else f"  {label}: FAILED: {err}")
+    # A merge whose input failed fails with that input's error: the first task with an error (in the tree's order)
+    # is its cause.
+    reported = set(drive_errors)
+    for _, label, err in sorted(merge_errors):
+        progress.line(f"  {label}: not done (an input failed)" if err in reported else f"  {label}: FAILED: {err}")
+        reported.add(err)
     if drive_errors or merge_errors:
         progress.line(f"semslam.city: failed ({len(drive_errors)} drive(s), {len(merge_errors)} merge(s) not done); "
                       "outputs already made are kept: the same command resumes from there")
