@@ -205,8 +205,9 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
     token = uuid.uuid4().hex[:8]
     client.subscribe_topic(city_tasks.EVENT_TOPIC, progress.on_event)
     workers = len(client.scheduler_info().get("workers", {}))
-    progress.line(f"semslam.city: {len(drives)} drive(s) on {workers} worker(s) at {client.scheduler.address}; "
-                  f"city map: {os.path.join(out, 'city')}")
+    on = f"{workers} worker(s)" if workers else "no worker yet (the tasks wait for one)"
+    progress.line(f"semslam.city: {len(drives)} drive(s), {on} at {client.scheduler.address}; city map: "
+                  f"{os.path.join(out, 'city')}")
     labels, futures, city = build_graph(client, drives, out, semslam, run_args, group, token)
     for d in drives:
         progress.line(f"  drive {d.name}: queued ({d.sequence})")

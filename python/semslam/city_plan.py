@@ -105,7 +105,8 @@ def read_manifest(path: str) -> List[Drive]:
             raise CityInputError(f"{path}: drives[{i}]: expected an object")
         unknown = sorted(set(entry) - known)
         if unknown:
-            raise CityInputError(f"{path}: drives[{i}]: unknown field '{unknown[0]}' (known: {', '.join(sorted(known))})")
+            raise CityInputError(f"{path}: drives[{i}]: unknown field '{unknown[0]}' "
+                                 f"(known: {', '.join(sorted(known))})")
         if "sequence" not in entry:
             raise CityInputError(f"{path}: drives[{i}]: field 'sequence' is missing")
         sequence = _manifest_path(entry["sequence"], "sequence", i, path, base)

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Tests of `python3 -m semslam.city` on a real Dask cluster: a scheduler and two worker processes on localhost
-(dask-scheduler, dask-worker, as on a cluster), the semslam binary ($SEMSLAM_BIN) and three short synthetic drives
+(`dask scheduler`, `dask worker`, as on a cluster), the semslam binary ($SEMSLAM_BIN) and three short synthetic drives
 through one town (route seeds 1, 2, 3).
 
 - the city of three drives: one session per drive, every drive's run folder complete, no temporary folder left, and
@@ -63,9 +63,10 @@ def free_port():
         return s.getsockname()[1]
 
 
-def dask_command(script, module):
-    found = shutil.which(script)
-    return [found] if found else [sys.executable, "-m", module]
+def dask_command(what):
+    """`dask scheduler` / `dask worker` (python3-distributed's commands), of this interpreter's installation."""
+    beside = os.path.join(os.path.dirname(sys.executable), "dask")
+    return [beside, what] if os.access(beside, os.X_OK) else [sys.executable, "-m", f"distributed.cli.dask_{what}"]
 
 
 def read_json(path):
@@ -138,12 +139,12 @@ class CityOnDaskTest(unittest.TestCase):
         cls.address = f"tcp://127.0.0.1:{free_port()}"
         cls.log = log = open(os.path.join(cls.tmp, "dask.log"), "w")
         cls.processes = [subprocess.Popen(
-            dask_command("dask-scheduler", "distributed.cli.dask_scheduler") +
+            dask_command("scheduler") +
             ["--host", "127.0.0.1", "--port", cls.address.rsplit(":", 1)[1], "--no-dashboard"],
             cwd=cls.tmp, stdout=log, stderr=log)]
         for i in range(2):  # with their nannies, which start a worker again when it dies
             cls.processes.append(subprocess.Popen(
-                dask_command("dask-worker", "distributed.cli.dask_worker") +
+                dask_command("worker") +
                 [cls.address, "--nthreads", "1", "--nworkers", "1", "--no-dashboard", "--name", f"w{i}",
                  "--local-directory", cls.tmp], cwd=cls.tmp, stdout=log, stderr=log))
         cls.client = distributed.Client(cls.address, timeout=60)
