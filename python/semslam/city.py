@@ -8,6 +8,8 @@ output already there is not made again, so running the same command after a cras
 task again when its worker dies. See README.md ("Many drives, one city map") and docs/formats.md (city manifest)."""
 
 import argparse
+import glob
+import hashlib
 import os
 import queue
 import shutil
@@ -188,7 +190,10 @@ def build_graph(client, drives: List[Drive], out: str, semslam: str, run_args: L
                 next_level.append(level[members[0]])
                 continue
             name = "city" if last else f"{depth}-{index}"
-            target = os.path.join(out, "city") if last else os.path.join(out, "merges", f"{depth}-{'+'.join(names)}")
+            # Named for the drives it holds (a hash: a city's worth of names would be too long a file name), so
+            # that a later run of the same command finds it.
+            digest = hashlib.sha1("\n".join(names).encode()).hexdigest()[:12]
+            target = os.path.join(out, "city") if last else os.path.join(out, "merges", f"{name}-{digest}")
             f = client.submit(city_tasks.merge_runs, name, [level[m][0] for m in members], target, semslam,
                               key=f"semslam-city-merge-{name}-{token}", retries=RETRIES, pure=False)
             labels[f.key] = f"merge {name}"
@@ -267,9 +272,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         print(f"semslam.city: error: {e}", file=sys.stderr)
         return 2
     client, cluster = connect(args, len(drives))
+    interrupted = False
     try:
         return run_city(client, drives, out, semslam, run_args_of(args), args.merge_group, Progress())
     except KeyboardInterrupt:
+        interrupted = True
         print("semslam.city: interrupted; finished drives and merges are kept: run the same command to resume",
               file=sys.stderr)
         return 130
@@ -277,6 +284,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         client.close()
         if cluster is not None:
             cluster.close()
+            if interrupted:  # the local workers, and their semslam processes, are gone: so are their outputs
+                for partial in glob.glob(os.path.join(glob.escape(out), "**", ".*.partial-*"), recursive=True):
+                    shutil.rmtree(partial, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -48,8 +48,14 @@ def _drive_root(sequence: str) -> str:
 
 
 def _default_name(sequence: str) -> str:
+    """The drive's output folder name: X for X/sequences/NN when NN is X's only sequence (the synthetic city),
+    X_NN when there are more (a KITTI odometry dataset), else the sequence folder's name."""
     root = _drive_root(sequence)
-    name = os.path.basename(root if root != sequence else sequence) or "drive"
+    name = os.path.basename(root) or "drive"
+    if root != sequence and os.path.basename(os.path.dirname(sequence)) == "sequences":
+        others = [d for d in os.listdir(os.path.dirname(sequence)) if not d.startswith(".")]
+        if len(others) > 1:
+            name += "_" + os.path.basename(sequence)
     return re.sub(r"[^A-Za-z0-9._-]", "_", name)
 
 
@@ -136,7 +142,11 @@ def read_manifest(path: str) -> List[Drive]:
 
 def unique_names(drives: Sequence[Drive], explicit: Sequence[bool]) -> None:
     """Gives drives whose names clash (two synthetic cities both named `city`) suffixes -2, -3, ...; two names set
-    by hand (explicit) that clash are an error."""
+    by hand (explicit) that clash, or one sequence given twice, are errors."""
+    sequences = [os.path.realpath(d.sequence) for d in drives]
+    for i, sequence in enumerate(sequences):
+        if sequence in sequences[:i]:
+            raise CityInputError(f"{drives[i].sequence}: the same drive is given twice")
     fixed_names = [d.name for d, fixed in zip(drives, explicit) if fixed]
     for name in fixed_names:
         if fixed_names.count(name) > 1:

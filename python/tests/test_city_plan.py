@@ -65,6 +65,12 @@ class CityPlanTest(unittest.TestCase):
         self.assertEqual((d.name, d.gps, d.landmarks), ("2011_09_26_drive_0005_sync", os.path.join(drive, "oxts"),
                                                          None))
 
+    def test_a_kitti_odometry_sequence_is_named_for_its_dataset_and_number(self):
+        for number in ("00", "07"):
+            os.makedirs(self.path("dataset", "sequences", number, "image_0"))
+        d = discover_drive(self.path("dataset", "sequences", "07"))
+        self.assertEqual((d.name, d.gps, d.landmarks), ("dataset_07", None, None))
+
     def test_a_relative_drive_is_made_absolute_and_a_missing_one_is_an_error(self):
         synthetic_city(self.path("rel"))
         cwd = os.getcwd()
@@ -123,6 +129,8 @@ class CityPlanTest(unittest.TestCase):
         self.assertEqual([d.name for d in drives], ["city-2", "city"])
         with self.assertRaisesRegex(CityInputError, r"two drives are named 'x'"):
             unique_names([Drive("x", "/a"), Drive("x", "/b")], [True, True])
+        with self.assertRaisesRegex(CityInputError, r"/a/: the same drive is given twice"):
+            unique_names([Drive("x", "/a"), Drive("y", "/b"), Drive("z", "/a/")], [False, False, False])
 
     def test_merge_tree(self):
         self.assertEqual(merge_tree(1), [])
