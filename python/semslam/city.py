@@ -10,6 +10,7 @@ task again when its worker dies. See README.md ("Many drives, one city map") and
 import argparse
 import glob
 import hashlib
+import json
 import os
 import queue
 import shutil
@@ -91,18 +92,10 @@ def prepare_out(out: str) -> str:
 
 
 def collect_drives(args) -> List[Drive]:
-    drives, explicit = [], []
-    for d in args.drives:
-        drives.append(discover_drive(d))
-        explicit.append(False)
+    drives = [discover_drive(d) for d in args.drives]
     if args.manifest:
-        import json
-        with open(args.manifest, encoding="utf-8") as f:  # read_manifest already checked it
-            entries = json.load(f)["drives"]
-        for drive, entry in zip(read_manifest(args.manifest), entries):
-            drives.append(drive)
-            explicit.append("name" in entry)
-    unique_names(drives, explicit)
+        drives += read_manifest(args.manifest)
+    unique_names(drives)
     return drives
 
 
@@ -171,7 +164,7 @@ def build_graph(client, drives: List[Drive], out: str, semslam: str, run_args: L
         futures.append(f)
         level.append((f, [d.name]))
     city_dir = os.path.join(out, "city")
-    if city_tasks.is_complete(city_dir, [os.path.join(out, "drives", d.name) for d in drives]):
+    if city_is_current(out, drives):
         # Made from these drives' runs as they are (the merges are removed once the city is done).
         f = client.submit(city_tasks.keep_city, city_dir, [f for f, _ in level],
                           key=f"semslam-city-merge-city-{token}", pure=False)
@@ -203,6 +196,37 @@ def build_graph(client, drives: List[Drive], out: str, semslam: str, run_args: L
     return labels, futures, level[0][0]
 
 
+CITY_JSON = "city.json"
+
+
+def city_is_current(out: str, drives: List[Drive]) -> bool:
+    """OUT/city is complete, made of these drives (OUT/city.json) and newer than each drive's run."""
+    try:
+        with open(os.path.join(out, CITY_JSON), encoding="utf-8") as f:
+            made_of = sorted((d["name"], d["sequence"]) for d in json.load(f)["drives"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return False
+    if made_of != sorted((d.name, d.sequence) for d in drives):
+        return False
+    return city_tasks.is_complete(os.path.join(out, "city"), [os.path.join(out, "drives", d.name) for d in drives])
+
+
+def write_city_json(out: str, drives: List[Drive], results: Dict[str, dict], city: dict) -> None:
+    """OUT/city.json: what the city was made of, with each drive's figures (temporary file, then renamed)."""
+    doc = {"city": "city", "sessions": city.get("sessions"), "drives": []}
+    for d in drives:
+        r = results.get(f"drive {d.name}", {})
+        doc["drives"].append({"name": d.name, "sequence": d.sequence, "gps": d.gps, "landmarks": d.landmarks,
+                              "gps_lever_arm": d.gps_lever_arm, "run": f"drives/{d.name}", "frames": r.get("frames"),
+                              "ate_rmse": r.get("ate_rmse"), "seconds": r.get("seconds")})
+    path = os.path.join(out, CITY_JSON)
+    tmp = f"{path}.tmp-{os.getpid()}"
+    with open(tmp, "w", encoding="utf-8") as f:
+        json.dump(doc, f, indent=2)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
 def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List[str], group: int,
              progress: Progress) -> int:
     from distributed import as_completed
@@ -216,7 +240,7 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
     labels, futures, city = build_graph(client, drives, out, semslam, run_args, group, token)
     for d in drives:
         progress.line(f"  drive {d.name}: queued ({d.sequence})")
-    drive_errors, merge_errors = [], []
+    drive_errors, merge_errors, results = [], [], {}
     order = {f.key: i for i, f in enumerate(futures)}
     pending = as_completed(futures, with_results=False)
     while not pending.is_empty():
@@ -226,7 +250,7 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
             label = labels[f.key]
             progress.ended.add(label)
             if f.status == "finished":
-                result = f.result()
+                result = results[label] = f.result()
                 state = "already complete" if result["reused"] else "done"
                 progress.line(f"  {label}: {state}: {_describe(result)}")
             elif label.startswith("drive"):
@@ -248,8 +272,9 @@ def run_city(client, drives: List[Drive], out: str, semslam: str, run_args: List
         progress.line(f"semslam.city: failed ({len(drive_errors)} drive(s), {len(merge_errors)} merge(s) not done); "
                       "outputs already made are kept: the same command resumes from there")
         return 1
+    write_city_json(out, drives, results, city.result())
     shutil.rmtree(os.path.join(out, "merges"), ignore_errors=True)
-    progress.line(f"semslam.city: city map in {city.result()['path']}")
+    progress.line(f"semslam.city: city map in {city.result()['path']} ({CITY_JSON}: its drives)")
     return 0
 
 

@@ -20,6 +20,7 @@ class Drive:
     gps: Optional[str] = None          # absolute, or None: no GPS
     landmarks: Optional[str] = None    # absolute, or None: no catalogue
     gps_lever_arm: Optional[List[float]] = None  # X,Y,Z metres in the camera frame
+    named_by_hand: bool = False  # the manifest gave the name: it is kept when names clash
 
     def run_args(self) -> List[str]:
         """The arguments of `semslam run` that say what this drive is (no --out)."""
@@ -125,6 +126,7 @@ def read_manifest(path: str) -> List[Drive]:
                 raise CityInputError(f"{path}: drives[{i}].name: expected letters, digits, '.', '_' or '-' "
                                      f"(a folder name), got {json.dumps(name)}")
             drive.name = name
+            drive.named_by_hand = True
         for key in ("gps", "landmarks"):
             if key in entry:
                 setattr(drive, key, _manifest_path(entry[key], key, i, path, base))
@@ -140,19 +142,19 @@ def read_manifest(path: str) -> List[Drive]:
     return drives
 
 
-def unique_names(drives: Sequence[Drive], explicit: Sequence[bool]) -> None:
+def unique_names(drives: Sequence[Drive]) -> None:
     """Gives drives whose names clash (two synthetic cities both named `city`) suffixes -2, -3, ...; two names set
-    by hand (explicit) that clash, or one sequence given twice, are errors."""
+    by hand that clash, or one sequence given twice, are errors."""
     sequences = [os.path.realpath(d.sequence) for d in drives]
     for i, sequence in enumerate(sequences):
         if sequence in sequences[:i]:
             raise CityInputError(f"{drives[i].sequence}: the same drive is given twice")
-    fixed_names = [d.name for d, fixed in zip(drives, explicit) if fixed]
+    fixed_names = [d.name for d in drives if d.named_by_hand]
     for name in fixed_names:
         if fixed_names.count(name) > 1:
             raise CityInputError(f"two drives are named '{name}': drive names must differ")
     taken = set()
-    for drive, fixed in sorted(zip(drives, explicit), key=lambda p: not p[1]):  # hand-set names keep theirs
+    for drive in sorted(drives, key=lambda d: not d.named_by_hand):  # hand-set names keep theirs
         name, k = drive.name, 2
         while name in taken:
             name, k = f"{drive.name}-{k}", k + 1

@@ -193,6 +193,9 @@ class CityOnDaskTest(unittest.TestCase):
                          sorted(os.path.realpath(s) for s in self.sequences))
         self.assertEqual([s["name"] for s in sessions], ["00"] * len(self.sequences))
         self.assertTrue(os.path.isfile(os.path.join(out, "city", "map.semslam")))
+        made_of = read_json(os.path.join(out, "city.json"))
+        self.assertEqual(sorted(d["sequence"] for d in made_of["drives"]), sorted(self.sequences))
+        self.assertEqual([d["frames"] for d in made_of["drives"]], [FRAMES] * len(self.sequences))
         self.assertEqual(partials_under(out), [])
         self.assertFalse(os.path.exists(os.path.join(out, "merges")))
 

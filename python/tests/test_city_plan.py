@@ -91,10 +91,10 @@ class CityPlanTest(unittest.TestCase):
             {"sequence": self.path("b"), "gps": "gps/b.csv", "landmarks": None, "gps_lever_arm": [0, -1.5, 0.25]},
         ]})
         a, b = read_manifest(manifest)
-        self.assertEqual((a.name, a.sequence, a.gps, a.landmarks),
-                         ("north", self.path("a", "sequences", "00"), None, self.path("a", "landmarks.csv")))
-        self.assertEqual((b.name, b.gps, b.landmarks, b.gps_lever_arm), ("b", self.path("gps", "b.csv"), None,
-                                                                         [0.0, -1.5, 0.25]))
+        self.assertEqual((a.name, a.sequence, a.gps, a.landmarks, a.named_by_hand),
+                         ("north", self.path("a", "sequences", "00"), None, self.path("a", "landmarks.csv"), True))
+        self.assertEqual((b.name, b.gps, b.landmarks, b.gps_lever_arm, b.named_by_hand),
+                         ("b", self.path("gps", "b.csv"), None, [0.0, -1.5, 0.25], False))
         self.assertEqual(b.run_args()[-2:], ["--gps-lever-arm", "0.0,-1.5,0.25"])
 
     def test_bad_manifests_name_the_file_and_field(self):
@@ -122,15 +122,15 @@ class CityPlanTest(unittest.TestCase):
 
     def test_clashing_names_get_suffixes_unless_both_were_set_by_hand(self):
         drives = [Drive("city", "/a"), Drive("city", "/b"), Drive("city", "/c")]
-        unique_names(drives, [False, False, False])
+        unique_names(drives)
         self.assertEqual([d.name for d in drives], ["city", "city-2", "city-3"])
-        drives = [Drive("city", "/a"), Drive("city", "/b")]
-        unique_names(drives, [False, True])  # the name set by hand keeps it
+        drives = [Drive("city", "/a"), Drive("city", "/b", named_by_hand=True)]
+        unique_names(drives)  # the name set by hand keeps it
         self.assertEqual([d.name for d in drives], ["city-2", "city"])
         with self.assertRaisesRegex(CityInputError, r"two drives are named 'x'"):
-            unique_names([Drive("x", "/a"), Drive("x", "/b")], [True, True])
+            unique_names([Drive("x", "/a", named_by_hand=True), Drive("x", "/b", named_by_hand=True)])
         with self.assertRaisesRegex(CityInputError, r"/a/: the same drive is given twice"):
-            unique_names([Drive("x", "/a"), Drive("y", "/b"), Drive("z", "/a/")], [False, False, False])
+            unique_names([Drive("x", "/a"), Drive("y", "/b"), Drive("z", "/a/")])
 
     def test_merge_tree(self):
         self.assertEqual(merge_tree(1), [])
@@ -219,6 +219,24 @@ class CityPlanTest(unittest.TestCase):
         touch(os.path.join(again, "run.json"), "{}")
         city_tasks.move_into_place(again, merged)
         self.assertEqual(sorted(os.listdir(self.path("out"))), ["city", "drives"])
+
+    def test_the_city_is_current_only_for_the_drives_it_was_made_of(self):
+        out = self.path("out")
+        drives = [Drive("a", "/data/a"), Drive("b", "/data/b")]
+        for d in drives:
+            touch(os.path.join(out, "drives", d.name, "run.json"), "{\"frames\": 5}")
+            os.utime(os.path.join(out, "drives", d.name, "run.json"), ns=(1, 1))
+        touch(os.path.join(out, "city", "run.json"), "{}")
+        self.assertFalse(city.city_is_current(out, drives))  # no city.json: not known what it holds
+        city.write_city_json(out, drives, {"drive a": {"frames": 5}}, {"sessions": 2})
+        self.assertTrue(city.city_is_current(out, drives))
+        self.assertTrue(city.city_is_current(out, drives[::-1]))
+        self.assertFalse(city.city_is_current(out, drives[:1]))
+        self.assertFalse(city.city_is_current(out, [Drive("a", "/data/a"), Drive("b", "/data/other")]))
+        with open(os.path.join(out, "city.json")) as f:
+            self.assertEqual([d["frames"] for d in json.load(f)["drives"]], [5, None])
+        os.utime(os.path.join(out, "drives", "b", "run.json"))  # drive b run again: the city is older
+        self.assertFalse(city.city_is_current(out, drives))
 
     def test_a_failed_command_reports_its_stderr_tail(self):
         with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive x failed \(exit code 3\).*line 30"):
