@@ -17,6 +17,7 @@ from .city_plan import Drive
 
 EVENT_TOPIC = "semslam.city"  # tasks report that they started on this Dask event topic
 RUN_JSON = "run.json"
+FINISHED = ("complete", "ok")  # run.json "status" of a finished run ("complete") and merge ("ok")
 
 
 class CityTaskError(RuntimeError):
@@ -121,8 +122,8 @@ def _check_output(folder: str, what: str) -> dict:
     if run is None:
         raise CityTaskError(f"{what}: the command succeeded but wrote no readable {RUN_JSON} in {folder}")
     status = run.get("status", "complete")
-    if status != "complete":
-        raise CityTaskError(f"{what}: {folder}/{RUN_JSON} has status '{status}', not 'complete'")
+    if status not in FINISHED:
+        raise CityTaskError(f"{what}: {folder}/{RUN_JSON} has status '{status}', not {' or '.join(FINISHED)}")
     return run
 
 
