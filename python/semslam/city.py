@@ -118,7 +118,10 @@ def _describe(result: dict) -> str:
     if isinstance(result.get("ate_rmse"), (int, float)) and result["ate_rmse"] >= 0:
         parts.append(f"ATE {result['ate_rmse']:.3f} m")
     if result.get("kind") == "merge" and result.get("sessions") is not None:
-        parts.append(f"{result['sessions']} sessions")
+        n, maps = result["sessions"], result.get("maps")
+        # Sessions no place or GPS tied together stay separate maps of the city's atlas.
+        parts.append(f"{n} session{'' if n == 1 else 's'}" + (f" in {maps} map{'' if maps == 1 else 's'}"
+                                                               if isinstance(maps, int) else ""))
     if isinstance(result.get("seconds"), (int, float)):
         parts.append(f"{result['seconds']:.1f} s")
     return ", ".join(parts)
@@ -187,8 +190,9 @@ def build_graph(client, drives: List[Drive], out: str, semslam: str, run_args: L
             # that a later run of the same command finds it.
             digest = hashlib.sha1("\n".join(names).encode()).hexdigest()[:12]
             target = os.path.join(out, "city") if last else os.path.join(out, "merges", f"{name}-{digest}")
+            # OUT/city holds whatever drives it was made of (city_is_current checked that above): made anew.
             f = client.submit(city_tasks.merge_runs, name, [level[m][0] for m in members], target, semslam,
-                              key=f"semslam-city-merge-{name}-{token}", retries=RETRIES, pure=False)
+                              reuse=not last, key=f"semslam-city-merge-{name}-{token}", retries=RETRIES, pure=False)
             labels[f.key] = f"merge {name}"
             futures.append(f)
             next_level.append((f, names))

@@ -132,7 +132,7 @@ def _summary(kind: str, name: str, folder: str, run: dict, reused: bool, worker:
     sessions = maps.get("sessions")
     return {"kind": kind, "name": name, "path": folder, "reused": reused, "worker": worker,
             "frames": run.get("frames"), "ate_rmse": run.get("ate_rmse"), "seconds": run.get("seconds"),
-            "sessions": len(sessions) if isinstance(sessions, list) else None}
+            "sessions": len(sessions) if isinstance(sessions, list) else None, "maps": maps.get("count")}
 
 
 def keep_city(city_dir: str, drive_results: List[dict]) -> dict:
@@ -165,11 +165,12 @@ def _path_of(item) -> str:
     return item["path"] if isinstance(item, dict) else item
 
 
-def merge_runs(name: str, inputs: List, out: str, semslam: str) -> dict:
-    """`semslam merge --maps IN... --out OUT` (inputs: run folders, or the summaries of the tasks that made them)."""
+def merge_runs(name: str, inputs: List, out: str, semslam: str, reuse: bool = True) -> dict:
+    """`semslam merge --maps IN... --out OUT` (inputs: run folders, or the summaries of the tasks that made them).
+    With `reuse`, an OUT newer than its inputs is kept: OUT must then be named for what it holds."""
     paths = [_path_of(i) for i in inputs]
     what = f"merge {name}"
-    if is_complete(out, paths):
+    if reuse and is_complete(out, paths):
         return _summary("merge", name, out, read_run_json(out), True, None)
     worker = _announce("merge", name)
     partial = new_partial(out)

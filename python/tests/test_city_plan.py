@@ -238,6 +238,55 @@ class CityPlanTest(unittest.TestCase):
         os.utime(os.path.join(out, "drives", "b", "run.json"))  # drive b run again: the city is older
         self.assertFalse(city.city_is_current(out, drives))
 
+    def fake_semslam(self):
+        """A stand-in for the binary that writes a run.json where `run` or `merge` is told to (--out), counts its
+        calls in calls.txt, and fails when FAIL_SEMSLAM is set in its environment."""
+        path = self.path("fake_semslam")
+        touch(path, """#!/bin/sh
+echo "$1" >> "$(dirname "$0")/calls.txt"
+if [ -n "$FAIL_SEMSLAM" ]; then echo "$1: error: it broke" >&2; exit 4; fi
+while [ $# -gt 0 ]; do [ "$1" = --out ] && out="$2"; shift; done
+mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}}' > "$out/run.json"
+""")
+        os.chmod(path, 0o755)
+        return path
+
+    def calls(self):
+        with open(self.path("calls.txt")) as f:
+            return f.read().split()
+
+    def test_tasks_run_their_command_once_and_leave_no_temporary_folder(self):
+        fake = self.fake_semslam()
+        drives_dir = self.path("out", "drives")
+        drive = Drive("d1", self.path("seq"))
+        result = city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])
+        self.assertEqual((result["frames"], result["reused"], result["path"]), (7, False, self.path(drives_dir, "d1")))
+        self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, [])["reused"])
+        self.assertEqual(self.calls(), ["run"])
+        other = city_tasks.run_drive(Drive("d0", self.path("seq0")), drives_dir, fake, [])
+        inputs = [result, other["path"]]  # a task's summary or a folder
+        city_dir = self.path("out", "city")
+        result = city_tasks.merge_runs("city", inputs, city_dir, fake)
+        self.assertEqual((result["sessions"], result["maps"], result["reused"]), (2, 1, False))
+        self.assertTrue(city_tasks.merge_runs("city", inputs, city_dir, fake)["reused"])
+        self.assertFalse(city_tasks.merge_runs("city", inputs, city_dir, fake, reuse=False)["reused"])
+        self.assertEqual(self.calls(), ["run", "run", "merge", "merge"])
+        # One map: its run folder is copied, semslam merge is not needed.
+        single = city_tasks.merge_runs("single", [other], self.path("out", "single"), fake)
+        self.assertEqual((single["frames"], self.calls()[-1]), (7, "merge"))
+        self.assertEqual(len(self.calls()), 4)
+        shutil.rmtree(self.path("out", "single"))
+        os.environ["FAIL_SEMSLAM"] = "1"
+        try:
+            with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive d2 failed \(exit code 4\).*it broke"):
+                city_tasks.run_drive(Drive("d2", self.path("seq")), drives_dir, fake, [])
+            with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)merge city failed.*merge: error: it broke"):
+                city_tasks.merge_runs("city", inputs, city_dir, fake, reuse=False)
+        finally:
+            del os.environ["FAIL_SEMSLAM"]
+        self.assertEqual(sorted(os.listdir(self.path("out"))), ["city", "drives"])  # the old city stays
+        self.assertEqual(sorted(os.listdir(drives_dir)), ["d0", "d1"])
+
     def test_a_failed_command_reports_its_stderr_tail(self):
         with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive x failed \(exit code 3\).*line 30"):
             city_tasks.run_command(["sh", "-c", "for i in $(seq 1 30); do echo line $i >&2; done; exit 3"],
