@@ -300,7 +300,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except CityInputError as e:
         print(f"semslam.city: error: {e}", file=sys.stderr)
         return 2
-    client, cluster = connect(args, len(drives))
+    try:
+        client, cluster = connect(args, len(drives))
+    except ImportError as e:
+        print(f"semslam.city: error: Dask distributed is missing ({e}): install python3-distributed "
+              "(scripts/install-deps.sh)", file=sys.stderr)
+        return 2
+    except (OSError, TimeoutError) as e:
+        print(f"semslam.city: error: cannot reach the Dask scheduler {args.scheduler or '(local)'}: {e}",
+              file=sys.stderr)
+        return 2
     interrupted = False
     try:
         return run_city(client, drives, out, semslam, run_args_of(args), args.merge_group, Progress())
