@@ -23,10 +23,7 @@ import threading
 import time
 import unittest
 
-try:
-    import distributed
-except ImportError:  # scripts/install-deps.sh installs python3-distributed
-    distributed = None
+import distributed  # python3-distributed (scripts/install-deps.sh)
 
 BIN = os.path.abspath(shutil.which(os.environ.get("SEMSLAM_BIN", "semslam")) or "semslam")
 FRAMES = 40
@@ -138,7 +135,6 @@ class CityRun:
         return self.process.returncode, "\n".join(self.lines)
 
 
-@unittest.skipIf(distributed is None and not os.environ.get("CI"), "python3-distributed is not installed")
 class CityOnDaskTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
