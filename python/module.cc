@@ -1,5 +1,5 @@
-// The Python module `semslam`: maps, trajectories, evaluation and a SLAM system fed from Python. See
-// python/README.md and examples/.
+// The compiled part of the Python package `semslam` (the extension semslam._semslam, which
+// python/semslam/__init__.py re-exports): maps, trajectories, evaluation and a SLAM system fed from Python.
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
@@ -125,7 +125,7 @@ Trajectory TrajectoryOf(const py::object& object, const char* what) {
 
 }  // namespace semslam::python
 
-PYBIND11_MODULE(semslam, m) {
+PYBIND11_MODULE(_semslam, m) {
   using namespace semslam;
   using namespace semslam::python;
   m.doc() = "semslam: visual semantic SLAM with landmarks (maps, trajectories, evaluation, a SLAM system)";

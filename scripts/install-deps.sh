@@ -20,6 +20,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libosmium2-dev zlib1g-dev libexpat1-dev libbz2-dev
   python3-dev python3-numpy pybind11-dev
+  python3-distributed
 )
 
 missing=()

@@ -1,0 +1,299 @@
+#!/usr/bin/python3
+"""Tests of semslam.city's pure parts (no Dask, no semslam process): finding a drive's GPS log and catalogue, the
+city manifest and its errors, drive names, the merge tree, the CLI's arguments, and the task helpers' folder
+handling."""
+
+import contextlib
+import io
+import json
+import os
+import shutil
+import tempfile
+import unittest
+
+from semslam import city, city_tasks
+from semslam.city_plan import CityInputError, Drive, discover_drive, merge_tree, read_manifest, unique_names
+
+
+def touch(path, text=""):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def synthetic_city(root):
+    """The layout `semslam synth --out ROOT` writes (only the parts the city command looks at)."""
+    os.makedirs(os.path.join(root, "sequences", "00", "image_0"))
+    os.makedirs(os.path.join(root, "oxts", "data"))
+    touch(os.path.join(root, "landmarks.csv"), "name,lat,lon\n")
+    return os.path.join(root, "sequences", "00")
+
+
+class CityPlanTest(unittest.TestCase):
+    def setUp(self):
+        base = os.environ.get("SEMSLAM_TEST_TMP")
+        if base:
+            os.makedirs(base, exist_ok=True)
+        self.tmp = tempfile.mkdtemp(prefix="python_city_plan_", dir=base)
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def path(self, *parts):
+        return os.path.join(self.tmp, *parts)
+
+    def write_manifest(self, doc, name="city.json"):
+        path = self.path(name)
+        touch(path, doc if isinstance(doc, str) else json.dumps(doc))
+        return path
+
+    def test_a_synthetic_drive_finds_its_gps_and_landmarks(self):
+        sequence = synthetic_city(self.path("drive_a"))
+        for given in (sequence, self.path("drive_a")):  # sequences/00 or the city's folder itself
+            d = discover_drive(given)
+            self.assertEqual(d.name, "drive_a")
+            self.assertEqual(d.sequence, given)
+            self.assertEqual(d.gps, self.path("drive_a", "oxts"))
+            self.assertEqual(d.landmarks, self.path("drive_a", "landmarks.csv"))
+        self.assertEqual(d.run_args(), ["--sequence", d.sequence, "--gps", d.gps, "--landmarks", d.landmarks])
+
+    def test_a_kitti_raw_drive_finds_its_oxts_and_nothing_else(self):
+        drive = self.path("2011_09_26", "2011_09_26_drive_0005_sync")
+        os.makedirs(os.path.join(drive, "image_00", "data"))
+        os.makedirs(os.path.join(drive, "oxts", "data"))
+        d = discover_drive(drive)
+        self.assertEqual((d.name, d.gps, d.landmarks), ("2011_09_26_drive_0005_sync", os.path.join(drive, "oxts"),
+                                                         None))
+
+    def test_a_kitti_odometry_sequence_is_named_for_its_dataset_and_number(self):
+        for number in ("00", "07"):
+            os.makedirs(self.path("dataset", "sequences", number, "image_0"))
+        d = discover_drive(self.path("dataset", "sequences", "07"))
+        self.assertEqual((d.name, d.gps, d.landmarks), ("dataset_07", None, None))
+
+    def test_a_relative_drive_is_made_absolute_and_a_missing_one_is_an_error(self):
+        synthetic_city(self.path("rel"))
+        cwd = os.getcwd()
+        try:
+            os.chdir(self.tmp)
+            self.assertEqual(discover_drive("rel").sequence, self.path("rel"))
+        finally:
+            os.chdir(cwd)
+        with self.assertRaisesRegex(CityInputError, r"nowhere: drive not found"):
+            discover_drive(self.path("nowhere"))
+
+    def test_manifest_paths_are_relative_to_it_and_null_means_none(self):
+        synthetic_city(self.path("a"))
+        synthetic_city(self.path("b"))
+        touch(self.path("gps", "b.csv"), "t,lat,lon\n")
+        manifest = self.write_manifest({"drives": [
+            {"sequence": "a/sequences/00", "name": "north", "gps": None},
+            {"sequence": self.path("b"), "gps": "gps/b.csv", "landmarks": None, "gps_lever_arm": [0, -1.5, 0.25]},
+        ]})
+        a, b = read_manifest(manifest)
+        self.assertEqual((a.name, a.sequence, a.gps, a.landmarks, a.named_by_hand),
+                         ("north", self.path("a", "sequences", "00"), None, self.path("a", "landmarks.csv"), True))
+        self.assertEqual((b.name, b.gps, b.landmarks, b.gps_lever_arm, b.named_by_hand),
+                         ("b", self.path("gps", "b.csv"), None, [0.0, -1.5, 0.25], False))
+        self.assertEqual(b.run_args()[-2:], ["--gps-lever-arm", "0.0,-1.5,0.25"])
+
+    def test_bad_manifests_name_the_file_and_field(self):
+        synthetic_city(self.path("a"))
+        cases = [
+            ("{\"drives\": [", r"city\.json:1: not JSON"),
+            ({"drive": []}, r"city\.json: expected an object with a non-empty list \"drives\""),
+            ({"drives": []}, r"non-empty list"),
+            ({"drives": ["a"]}, r"drives\[0\]: expected an object"),
+            ({"drives": [{"gps": "a/oxts"}]}, r"drives\[0\]: field 'sequence' is missing"),
+            ({"drives": [{"sequence": "a", "lever": 1}]}, r"drives\[0\]: unknown field 'lever'"),
+            ({"drives": [{"sequence": "a"}, {"sequence": "b"}]}, r"drives\[1\]\.sequence: .*/b not found"),
+            ({"drives": [{"sequence": "a", "gps": 3}]}, r"drives\[0\]\.gps: expected a path"),
+            ({"drives": [{"sequence": "a", "landmarks": "x.csv"}]}, r"drives\[0\]\.landmarks: .*x\.csv not found"),
+            ({"drives": [{"sequence": "a", "gps_lever_arm": [1, 2]}]}, r"gps_lever_arm: expected \[x, y, z\]"),
+            ({"drives": [{"sequence": "a", "gps_lever_arm": [1, 2, "3"]}]}, r"gps_lever_arm"),
+            ({"drives": [{"sequence": "a", "name": "../up"}]}, r"drives\[0\]\.name: expected letters"),
+        ]
+        for doc, message in cases:
+            with self.subTest(doc=doc):
+                with self.assertRaisesRegex(CityInputError, message):
+                    read_manifest(self.write_manifest(doc))
+        with self.assertRaisesRegex(CityInputError, r"missing\.json: cannot read the manifest"):
+            read_manifest(self.path("missing.json"))
+
+    def test_clashing_names_get_suffixes_unless_both_were_set_by_hand(self):
+        drives = [Drive("city", "/a"), Drive("city", "/b"), Drive("city", "/c")]
+        unique_names(drives)
+        self.assertEqual([d.name for d in drives], ["city", "city-2", "city-3"])
+        drives = [Drive("city", "/a"), Drive("city", "/b", named_by_hand=True)]
+        unique_names(drives)  # the name set by hand keeps it
+        self.assertEqual([d.name for d in drives], ["city-2", "city"])
+        with self.assertRaisesRegex(CityInputError, r"two drives are named 'x'"):
+            unique_names([Drive("x", "/a", named_by_hand=True), Drive("x", "/b", named_by_hand=True)])
+        with self.assertRaisesRegex(CityInputError, r"/a/: the same drive is given twice"):
+            unique_names([Drive("x", "/a"), Drive("y", "/b"), Drive("z", "/a/")])
+
+    def test_merge_tree(self):
+        self.assertEqual(merge_tree(1), [])
+        self.assertEqual(merge_tree(2), [[[0, 1]]])
+        self.assertEqual(merge_tree(3), [[[0, 1], [2]], [[0, 1]]])
+        self.assertEqual(merge_tree(4), [[[0, 1], [2, 3]], [[0, 1]]])
+        self.assertEqual(merge_tree(5), [[[0, 1], [2, 3], [4]], [[0, 1], [2]], [[0, 1]]])
+        self.assertEqual(merge_tree(7, 3), [[[0, 1, 2], [3, 4], [5, 6]], [[0, 1, 2]]])
+        for n in range(1, 40):
+            for k in (2, 3, 4):
+                levels = merge_tree(n, k)
+                count = n
+                for groups in levels:  # every map of a level in exactly one group, in order, at most k
+                    self.assertEqual([i for g in groups for i in g], list(range(count)))
+                    self.assertTrue(all(1 <= len(g) <= k for g in groups))
+                    count = len(groups)
+                self.assertEqual(count, 1)
+                depth = 0
+                while k ** depth < n:
+                    depth += 1
+                self.assertEqual(len(levels), depth, (n, k))
+        with self.assertRaises(ValueError):
+            merge_tree(0)
+        with self.assertRaises(ValueError):
+            merge_tree(3, 1)
+
+    def test_cli_arguments(self):
+        args = city.parse_args(["--drives", "a", "b", "--out", "o", "--mode", "stereo", "--frames", "0:50", "--",
+                                "--gps-every", "10"])
+        self.assertEqual(args.drives, ["a", "b"])
+        self.assertEqual(city.run_args_of(args), ["--mode", "stereo", "--frames", "0:50", "--pacing", "synchronous",
+                                                  "--gps-every", "10"])
+        args = city.parse_args(["--drives", "a", "--out", "o", "--", "--pacing", "fast"])
+        self.assertEqual(city.run_args_of(args), ["--pacing", "fast"])
+        for bad in (["--out", "o"], ["--drives", "a"], ["--drives", "a", "--out", "o", "--local-workers", "0"],
+                    ["--drives", "a", "--out", "o", "--scheduler", "tcp://h:1", "--local-workers", "2"]):
+            with self.subTest(argv=bad), self.assertRaises(SystemExit), contextlib.redirect_stderr(io.StringIO()):
+                city.parse_args(bad)
+
+    def test_main_refuses_bad_input_before_starting_dask(self):
+        synthetic_city(self.path("a"))
+        touch(self.path("file"))
+        fake = self.path("fake_semslam")
+        touch(fake, "#!/bin/sh\nexit 0\n")
+        os.chmod(fake, 0o755)
+        cases = [
+            (["--drives", self.path("nowhere"), "--out", self.path("o"), "--semslam", fake], "drive not found"),
+            (["--drives", self.path("a"), "--out", self.path("file"), "--semslam", fake], "is not a folder"),
+            (["--drives", self.path("a"), "--out", self.path("o"), "--semslam", self.path("no_binary")],
+             "not found or not executable"),
+            (["--manifest", self.write_manifest({"drives": {}}), "--out", self.path("o"), "--semslam", fake],
+             "non-empty list"),
+        ]
+        for argv, message in cases:
+            with self.subTest(argv=argv):
+                err = io.StringIO()
+                with contextlib.redirect_stderr(err):
+                    code = city.main(argv)
+                self.assertEqual(code, 2)
+                self.assertIn(message, err.getvalue())
+        if os.geteuid() != 0:  # root writes anywhere
+            os.makedirs(self.path("ro"))
+            os.chmod(self.path("ro"), 0o555)
+            with self.assertRaisesRegex(CityInputError, "cannot write the output folder"):
+                city.prepare_out(self.path("ro", "out"))
+
+    def test_an_output_is_renamed_into_place_and_stale_partials_go(self):
+        final = self.path("out", "drives", "d1")
+        stale = city_tasks.partial_prefix(final) + "dead"
+        touch(os.path.join(stale, "run.log"))
+        partial = city_tasks.new_partial(final)
+        self.assertFalse(os.path.exists(stale))
+        self.assertTrue(os.path.basename(partial).startswith(".d1.partial-"))
+        touch(os.path.join(partial, "run.json"), "{\"status\": \"complete\", \"frames\": 3}")
+        self.assertFalse(city_tasks.is_complete(final))
+        city_tasks.move_into_place(partial, final)
+        self.assertTrue(city_tasks.is_complete(final))
+        # A newer input makes an output stale; a folder that is replaced leaves nothing beside it.
+        merged = self.path("out", "city")
+        touch(os.path.join(merged, "run.json"), "{}")
+        os.utime(os.path.join(final, "run.json"), ns=(1, 1))
+        self.assertTrue(city_tasks.is_complete(merged, [final]))
+        os.utime(os.path.join(merged, "run.json"), ns=(0, 0))
+        self.assertFalse(city_tasks.is_complete(merged, [final]))
+        again = city_tasks.new_partial(merged)
+        touch(os.path.join(again, "run.json"), "{}")
+        city_tasks.move_into_place(again, merged)
+        self.assertEqual(sorted(os.listdir(self.path("out"))), ["city", "drives"])
+
+    def test_the_city_is_current_only_for_the_drives_it_was_made_of(self):
+        out = self.path("out")
+        drives = [Drive("a", "/data/a"), Drive("b", "/data/b")]
+        for d in drives:
+            touch(os.path.join(out, "drives", d.name, "run.json"), "{\"frames\": 5}")
+            os.utime(os.path.join(out, "drives", d.name, "run.json"), ns=(1, 1))
+        touch(os.path.join(out, "city", "run.json"), "{}")
+        self.assertFalse(city.city_is_current(out, drives))  # no city.json: not known what it holds
+        city.write_city_json(out, drives, {"drive a": {"frames": 5}}, {"sessions": 2})
+        self.assertTrue(city.city_is_current(out, drives))
+        self.assertTrue(city.city_is_current(out, drives[::-1]))
+        self.assertFalse(city.city_is_current(out, drives[:1]))
+        self.assertFalse(city.city_is_current(out, [Drive("a", "/data/a"), Drive("b", "/data/other")]))
+        with open(os.path.join(out, "city.json")) as f:
+            self.assertEqual([d["frames"] for d in json.load(f)["drives"]], [5, None])
+        os.utime(os.path.join(out, "drives", "b", "run.json"))  # drive b run again: the city is older
+        self.assertFalse(city.city_is_current(out, drives))
+
+    def fake_semslam(self):
+        """A stand-in for the binary that writes a run.json where `run` or `merge` is told to (--out), counts its
+        calls in calls.txt, and fails when FAIL_SEMSLAM is set in its environment."""
+        path = self.path("fake_semslam")
+        touch(path, """#!/bin/sh
+echo "$1" >> "$(dirname "$0")/calls.txt"
+if [ -n "$FAIL_SEMSLAM" ]; then echo "$1: error: it broke" >&2; exit 4; fi
+while [ $# -gt 0 ]; do [ "$1" = --out ] && out="$2"; shift; done
+mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}}' > "$out/run.json"
+""")
+        os.chmod(path, 0o755)
+        return path
+
+    def calls(self):
+        with open(self.path("calls.txt")) as f:
+            return f.read().split()
+
+    def test_tasks_run_their_command_once_and_leave_no_temporary_folder(self):
+        fake = self.fake_semslam()
+        drives_dir = self.path("out", "drives")
+        drive = Drive("d1", self.path("seq"))
+        result = city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])
+        self.assertEqual((result["frames"], result["reused"], result["path"]), (7, False, self.path(drives_dir, "d1")))
+        self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, [])["reused"])
+        self.assertEqual(self.calls(), ["run"])
+        other = city_tasks.run_drive(Drive("d0", self.path("seq0")), drives_dir, fake, [])
+        inputs = [result, other["path"]]  # a task's summary or a folder
+        city_dir = self.path("out", "city")
+        result = city_tasks.merge_runs("city", inputs, city_dir, fake)
+        self.assertEqual((result["sessions"], result["maps"], result["reused"]), (2, 1, False))
+        self.assertTrue(city_tasks.merge_runs("city", inputs, city_dir, fake)["reused"])
+        self.assertFalse(city_tasks.merge_runs("city", inputs, city_dir, fake, reuse=False)["reused"])
+        self.assertEqual(self.calls(), ["run", "run", "merge", "merge"])
+        # One map: its run folder is copied, semslam merge is not needed.
+        single = city_tasks.merge_runs("single", [other], self.path("out", "single"), fake)
+        self.assertEqual((single["frames"], self.calls()[-1]), (7, "merge"))
+        self.assertEqual(len(self.calls()), 4)
+        shutil.rmtree(self.path("out", "single"))
+        os.environ["FAIL_SEMSLAM"] = "1"
+        try:
+            with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive d2 failed \(exit code 4\).*it broke"):
+                city_tasks.run_drive(Drive("d2", self.path("seq")), drives_dir, fake, [])
+            with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)merge city failed.*merge: error: it broke"):
+                city_tasks.merge_runs("city", inputs, city_dir, fake, reuse=False)
+        finally:
+            del os.environ["FAIL_SEMSLAM"]
+        self.assertEqual(sorted(os.listdir(self.path("out"))), ["city", "drives"])  # the old city stays
+        self.assertEqual(sorted(os.listdir(drives_dir)), ["d0", "d1"])
+
+    def test_a_failed_command_reports_its_stderr_tail(self):
+        with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive x failed \(exit code 3\).*line 30"):
+            city_tasks.run_command(["sh", "-c", "for i in $(seq 1 30); do echo line $i >&2; done; exit 3"],
+                                   "drive x")
+        with self.assertRaisesRegex(city_tasks.CityTaskError, r"cannot start"):
+            city_tasks.run_command([self.path("no_binary")], "drive x")
+
+
+if __name__ == "__main__":
+    unittest.main()
