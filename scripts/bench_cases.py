@@ -577,7 +577,8 @@ def first_output_case(dry_run):
 def all_cases(quick, first_output=False, first_output_dry_run=False):
     """The benchmark's cases in the order they run. quick: shorter towns, one seed, a shorter demo, no long drive,
     no first output."""
-    cases = real_cases(quick)
+    import bench_city  # it builds on this module's helpers
+    cases = real_cases(quick) + bench_city.real_merge_cases()
     if quick:
         cases += synthetic_cases([5153], 400, ["mono"], {"mono": 60, "stereo": 75})
         cases.append(demo_case(400, 100, 110, variants={"synchronous": 1, "quiet": 1, "busy": 0}))
@@ -585,6 +586,7 @@ def all_cases(quick, first_output=False, first_output_dry_run=False):
         cases += long_cases()
         cases += synthetic_cases([5153, 9241], 900, ["mono", "stereo"], {"mono": 120, "stereo": 170})
         cases.append(demo_case(1200, 300, 290, variants={"synchronous": 1, "quiet": None, "busy": 0}))
+        cases += bench_city.city_cases(600, {"mono": 330, "stereo": 400})
     if first_output or first_output_dry_run:
         cases.append(first_output_case(first_output_dry_run and not first_output))
     return cases

@@ -85,8 +85,8 @@ TEST(Atlas, MergingMovesEveryKeyFrameAndPointAndLeavesOneOrigin) {
 }
 
 TEST(Atlas, AGapLinkStandsBetweenTheGoodKeyFramesForItsEnds) {
-  // before (kf 1, its parent kf 0) in map 0; after (kf 3, its parent kf 2) in map 1. Culling both ends hands the
-  // link to their parents, through the poses relative to them that culling keeps.
+  // before (kf 1, its parent kf 0) in map 0; after (kf 3, its parent kf 2) in map 1. Culling both ends hands
+  // the link to their parents, through the poses relative to them that culling keeps.
   Map map;
   auto lock = map.WriteLock();
   KeyFrame* k0 = AddKeyFrameWithPoints(map, 0, 0.0, 3);
@@ -116,8 +116,8 @@ TEST(Atlas, AGapLinkStandsBetweenTheGoodKeyFramesForItsEnds) {
   before->CorrectScale(0.5);
 
   // k0 and k2 stand in for the culled ends: k0_from_k2 = k0_from_before * before_from_after * after_from_k2.
-  const Rigid3d expected = k0->camera_from_world() * before->world_from_camera() * after_from_before.Inverse() *
-                           after->camera_from_world() * k2->world_from_camera();
+  const Rigid3d expected = k0->camera_from_world() * before->world_from_camera() *
+                           after_from_before.Inverse() * after->camera_from_world() * k2->world_from_camera();
   before->SetBad();
   after->SetBad();
   edge = ResolveGapLink(link);
@@ -197,6 +197,69 @@ TEST(Atlas, TheMapFileKeepsSessionsMapsAndOrigins) {
   }
   // The loaded atlas goes on numbering maps after the stored ones.
   EXPECT_EQ(loaded.StartNewMap(), 2u);
+}
+
+TEST(Atlas, AMapFileAppendedToAnotherMapBecomesMoreSessionsAndMapsOfIt) {
+  testing::TempDir dir;
+  // Two drives, saved apart: the first with one map, the second with two (each file numbers from 0).
+  const auto first_path = dir / "first.semslam", second_path = dir / "second.semslam";
+  {
+    Map map;
+    auto lock = map.WriteLock();
+    map.NameCurrentSession("first", "/a");
+    KeyFrame* a = AddKeyFrameWithPoints(map, 0, 0.0, 4);
+    KeyFrame* b = AddKeyFrameWithPoints(map, 1, 1.0, 0);
+    ObservePointsOf(b, a, 4, 0);
+    for (KeyFrame* kf : map.KeyFrames()) kf->UpdateConnections();
+    WriteMapFile(first_path, map);
+  }
+  {
+    Map map;
+    auto lock = map.WriteLock();
+    map.NameCurrentSession("second", "/b");
+    KeyFrame* a = AddKeyFrameWithPoints(map, 0, 5.0, 3);
+    KeyFrame* b = AddKeyFrameWithPoints(map, 1, 6.0, 0);
+    ObservePointsOf(b, a, 3, 0);
+    map.StartNewMap();
+    AddKeyFrameWithPoints(map, 2, 9.0, 2);
+    for (KeyFrame* kf : map.KeyFrames()) kf->UpdateConnections();
+    WriteMapFile(second_path, map);
+  }
+  Map atlas;
+  auto lock = atlas.WriteLock();
+  const MapFileContents first = AppendMapFile(first_path, atlas);  // into an empty map: as ReadMapFile
+  EXPECT_EQ(first.first_session, 0u);
+  EXPECT_EQ(first.first_map_id, 0u);
+  const MapFileContents second = AppendMapFile(second_path, atlas);
+  EXPECT_EQ(second.first_session, 1u);
+  EXPECT_EQ(second.first_map_id, 1u);
+  ASSERT_EQ(atlas.sessions().size(), 2u);
+  EXPECT_EQ(atlas.sessions()[0].name, "first");
+  EXPECT_EQ(atlas.sessions()[1].name, "second");
+  EXPECT_EQ(atlas.sessions()[1].id, 1u);
+  EXPECT_EQ(atlas.MapIds(), (std::vector<std::uint32_t>{0, 1, 2}));
+  EXPECT_EQ(atlas.next_map_id(), 3u);
+  // Cameras by the atlas's map ids.
+  EXPECT_EQ(second.cameras.size(), 2u);
+  EXPECT_TRUE(second.cameras.count(1) && second.cameras.count(2));
+  const auto kfs = atlas.KeyFrames();
+  ASSERT_EQ(kfs.size(), 5u);
+  const std::vector<std::uint64_t> ids = {0, 1, 2, 3, 4};
+  const std::vector<std::uint32_t> sessions = {0, 0, 1, 1, 1}, maps = {0, 0, 1, 1, 2};
+  for (size_t k = 0; k < kfs.size(); ++k) {
+    EXPECT_EQ(kfs[k]->id(), ids[k]) << k;
+    EXPECT_EQ(kfs[k]->session(), sessions[k]) << k;
+    EXPECT_EQ(kfs[k]->map_id(), maps[k]) << k;
+  }
+  // Points, observations and the spanning tree stay within their own file's keyframes.
+  EXPECT_EQ(atlas.NumMapPoints(), 4u + 3u + 2u);
+  EXPECT_EQ(atlas.MapPointsOfMap(1).size(), 3u);
+  EXPECT_EQ(kfs[3]->parent(), kfs[2]);
+  EXPECT_EQ(kfs[2]->parent(), nullptr);
+  for (const MapPoint* p : atlas.MapPointsOfMap(1)) {
+    for (const auto& [kf, index] : p->observations()) EXPECT_EQ(kf->session(), 1u);
+  }
+  EXPECT_EQ(atlas.next_point_id(), 9u);
 }
 
 TEST(Atlas, EachMapsFirstKeyFrameIsARootUntilAMergeGivesItAnOlderNeighbour) {

@@ -31,7 +31,8 @@ std::vector<std::string> Lines(const std::string& text) {
 std::vector<std::string> ErrorLines(const std::string& err) {
   std::vector<std::string> lines;
   for (std::string& line : Lines(err)) {
-    const bool log_line = line.find("] [info] ") != std::string::npos || line.find("] [warning] ") != std::string::npos;
+    const bool log_line =
+        line.find("] [info] ") != std::string::npos || line.find("] [warning] ") != std::string::npos;
     if (!log_line) lines.push_back(std::move(line));
   }
   return lines;
@@ -113,9 +114,11 @@ Artifact SharedArtifact(const std::string& name, const std::vector<std::string>&
   return artifact;
 }
 
-Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed) {
-  const std::vector<std::string> args = {"synth", "--frames", std::to_string(frames), "--seed",
-                                         std::to_string(seed), "-q"};
+Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed,
+                       const std::vector<std::string>& extra) {
+  std::vector<std::string> args = {"synth",  "--frames",           std::to_string(frames),
+                                   "--seed", std::to_string(seed), "-q"};
+  args.insert(args.end(), extra.begin(), extra.end());
   const fs::path binary = testing::SynthBinary();
   Artifact town = SharedArtifact(
       name, args,
@@ -164,9 +167,21 @@ Artifact MonoRun() {
               (data / "oxts").string(), "--landmarks", (data / "landmarks.csv").string()});
 }
 
+Artifact SecondDriveDataset() {
+  return SyntheticTown("city200_traffic2", kSyntheticFrames, 1, {"--traffic-seed", "2"});
+}
+
+Artifact SecondDriveMonoRun() {
+  const Artifact city = SecondDriveDataset();
+  if (!city.ok()) return city;
+  const fs::path data = city.dir;
+  return Run("mono_run_traffic2", city,
+             {"--mode", "mono", "--pacing", "synchronous", "--segmenter", "truth-noisy:0.25", "--gps",
+              (data / "oxts").string(), "--landmarks", (data / "landmarks.csv").string()});
+}
+
 Artifact StereoRun() {
-  return Run("stereo_run", SyntheticDataset(),
-             {"--mode", "stereo", "--pacing", "synchronous"});
+  return Run("stereo_run", SyntheticDataset(), {"--mode", "stereo", "--pacing", "synchronous"});
 }
 
 Artifact TinyStereoRun() {

@@ -51,7 +51,9 @@ Artifact SharedArtifact(const std::string& name, const std::vector<std::string>&
 
 // `semslam synth --frames F --seed S` rendered by testing::SynthBinary() (once per that binary), as the
 // artifact `name`; its dir is the dataset.
-Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed);
+// `extra`: more synth arguments (e.g. --route-seed).
+Artifact SyntheticTown(const std::string& name, int frames, std::uint64_t seed,
+                       const std::vector<std::string>& extra = {});
 
 // `semslam synth --out DIR --frames 200 --seed 1`: the synthetic city, 200 frames (~195 m, one left turn,
 // eight landmarks, GPS every frame with 1 m noise).
@@ -63,6 +65,10 @@ Artifact TinyDataset();
 // --landmarks D/landmarks.csv` over the 200-frame city: the one monocular run of the suite (SLAM, semantics,
 // GPS and landmarks; semantics and geography come after tracking and do not change it).
 Artifact MonoRun();
+// The same streets driven again (`synth --traffic-seed 2`, 200 frames: other parked cars, GPS and sensor
+// noise), and the same run as MonoRun over it.
+Artifact SecondDriveDataset();
+Artifact SecondDriveMonoRun();
 // `semslam run --sequence D --mode stereo --pacing synchronous` over the 200-frame city.
 Artifact StereoRun();
 

@@ -174,11 +174,18 @@ void LoopCloser::Run() {
   queue_cv_.notify_all();
 }
 
-bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps) {
+bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps,
+                                 const MergeCheck& merge_check) {
   Stopwatch watch;
   bool corrected = false;
   if (DetectLoop(current, excluded_maps)) {
-    if (ComputeSim3(current)) {
+    const auto checked = [&] {
+      if (!merge_check || matched_keyframe_->map_id() == current->map_id()) return true;
+      auto lock = map_.ReadLock();
+      return merge_check(*current, *matched_keyframe_,
+                         current_from_world_.Inverse() * Sim3d(current->camera_from_world()));
+    };
+    if (ComputeSim3(current) && checked()) {
       CorrectLoop(current);
       corrected = true;
     } else {

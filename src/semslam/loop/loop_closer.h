@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <set>
@@ -131,10 +132,15 @@ class LoopCloser {
   void Join();
 
   void InsertKeyFrame(KeyFrame* keyframe);
+  // Whether a verified merge goes ahead: the current keyframe, the matched one (of another map) and the
+  // transform that would take the current keyframe's map into the matched one's frame.
+  using MergeCheck = std::function<bool(const KeyFrame& current, const KeyFrame& matched,
+                                        const Sim3d& matched_from_current_map)>;
   // What the thread does with a keyframe, in the caller's thread, for a closer not started (merging saved
-  // maps): detection among keyframes of maps other than `excluded_maps`, then verification and correction
-  // (a merge when the place is in another map). Returns whether a loop or merge was made.
-  bool ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps = {});
+  // maps): detection among keyframes of maps other than `excluded_maps`, then verification, `merge_check` for
+  // a merge, and correction. Returns whether a loop or merge was made.
+  bool ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps = {},
+                       const MergeCheck& merge_check = {});
   // Forgets the consistency groups of earlier keyframes (before keyframes that do not follow them).
   void ForgetCandidates();
   // Blocks until the queue is empty and no global BA is running.

@@ -4,7 +4,9 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -23,6 +25,7 @@
 #include "semslam/landmarks/catalogue.h"
 #include "semslam/loop/loop_closer.h"
 #include "semslam/map/map_file.h"
+#include "semslam/map/map_validation.h"
 #include "semslam/mapping/map_georeference.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
@@ -217,6 +220,82 @@ Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_
   return t;
 }
 
+// Which merges place recognition may make between saved maps. A place seen on two drives passes loop
+// closing's geometric checks; so does a look-alike (towns repeat their facades), and between maps that share
+// no odometry nothing else would tell. So: between two maps in the world, the merge must agree with where
+// their GPS placed them; otherwise a second place, out of sight of the first (no covisibility), must give the
+// same transform.
+class MergeVerifier {
+ public:
+  explicit MergeVerifier(const std::set<std::uint32_t>& world_maps) : world_maps_(world_maps) {}
+
+  bool operator()(const KeyFrame& current, const KeyFrame& matched, const Sim3d& matched_from_current_map) {
+    const Eigen::Vector3d centre = current.world_from_camera().translation;
+    if (world_maps_.count(current.map_id()) && world_maps_.count(matched.map_id())) {
+      const double shift_m = (matched_from_current_map * centre - centre).norm();
+      const double turn_deg = Eigen::AngleAxisd(matched_from_current_map.rotation).angle() * 180.0 / M_PI;
+      const bool agrees = shift_m <= kMaxWorldShiftM && turn_deg <= kMaxWorldTurnDeg &&
+                          std::abs(std::log(matched_from_current_map.scale)) <= kMaxWorldLogScale;
+      spdlog::info(
+          "merge of map {} into map {}: {} with their GPS placement (it moves keyframe {} by {:.1f} m, "
+          "{:.1f} deg, scale {:.3f})",
+          current.map_id(), matched.map_id(), agrees ? "agrees" : "disagrees", current.id(), shift_m,
+          turn_deg, matched_from_current_map.scale);
+      if (!agrees) ++rejected_;
+      return agrees;
+    }
+    const std::pair<std::uint32_t, std::uint32_t> pair{current.map_id(), matched.map_id()};
+    std::vector<Proposal>& earlier = proposals_[pair];
+    for (const Proposal& p : earlier) {
+      const std::vector<KeyFrame*>& covisibles = current.Covisibles();
+      if (p.keyframe == &current || p.keyframe->is_bad() ||
+          std::find(covisibles.begin(), covisibles.end(), p.keyframe) != covisibles.end()) {
+        continue;
+      }
+      // Both transforms applied to both places: how far apart they put them, against the distance between
+      // the places (the matched map's units).
+      const Eigen::Vector3d other = p.keyframe->world_from_camera().translation;
+      const double span = (matched_from_current_map * centre - matched_from_current_map * other).norm();
+      const double disagreement = std::max((matched_from_current_map * centre - p.transform * centre).norm(),
+                                           (matched_from_current_map * other - p.transform * other).norm());
+      const double turn_deg =
+          Eigen::AngleAxisd(matched_from_current_map.rotation * p.transform.rotation.inverse()).angle() *
+          180.0 / M_PI;
+      if (span > 0.0 && disagreement <= kMaxRelativeDisagreement * span &&
+          turn_deg <= kMaxTurnDisagreementDeg) {
+        spdlog::info(
+            "merge of map {} into map {}: keyframes {} and {}, out of sight of each other, agree ({:.1f} % "
+            "of the {:.1f} units between them, {:.1f} deg)",
+            current.map_id(), matched.map_id(), p.keyframe->id(), current.id(), 100.0 * disagreement / span,
+            span, turn_deg);
+        proposals_.clear();
+        return true;
+      }
+    }
+    spdlog::info("merge of map {} into map {} at keyframe {}: kept until another place confirms it",
+                 current.map_id(), matched.map_id(), current.id());
+    earlier.push_back({&current, matched_from_current_map});
+    ++rejected_;
+    return false;
+  }
+
+  int rejected() const { return rejected_; }
+
+ private:
+  static constexpr double kMaxWorldShiftM = 10.0;  // GPS σ of metres, a fused map's error of a few
+  static constexpr double kMaxWorldTurnDeg = 10.0;
+  static constexpr double kMaxWorldLogScale = 0.1;
+  static constexpr double kMaxRelativeDisagreement = 0.1;
+  static constexpr double kMaxTurnDisagreementDeg = 5.0;
+  struct Proposal {
+    const KeyFrame* keyframe;
+    Sim3d transform;
+  };
+  const std::set<std::uint32_t>& world_maps_;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Proposal>> proposals_;
+  int rejected_ = 0;
+};
+
 }  // namespace
 
 SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
@@ -327,6 +406,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   // 3. Place recognition across maps.
   std::string status = "ok";
   size_t place_merges = 0;
+  int proposals_rejected = 0;
   if (options.place_recognition) {
     std::vector<std::uint32_t> map_ids;
     size_t to_examine = 0;
@@ -336,6 +416,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       to_examine = map.NumKeyFrames();
     }
     ProgressReporter progress("merge", to_examine, options.show_progress);
+    MergeVerifier verifier(world_maps);
     size_t examined = 0;
     // Until a pass over every map merges nothing (a map merged late may hold the place another one needs).
     for (bool merged = true; merged && map_ids.size() > 1 && status == "ok";) {
@@ -362,7 +443,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
           }
           progress.Update(std::min(++examined, to_examine),
                           fmt::format("map {}, {} merges", map_id, place_merges));
-          if (kf->is_bad() || !slam.loop_closer().ProcessKeyFrame(kf, excluded)) continue;
+          if (kf->is_bad() || !slam.loop_closer().ProcessKeyFrame(kf, excluded, std::ref(verifier))) continue;
           ++place_merges;
           merged = true;
           if (world_maps.erase(map_id)) world_maps.insert(kf->map_id());
@@ -374,6 +455,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       map_ids = map.MapIds();
     }
     progress.Finish(fmt::format("{} maps merged by place recognition", place_merges));
+    proposals_rejected = verifier.rejected();
   }
 
   // 4. The final bundle adjustment of each map.
@@ -396,6 +478,21 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       joins.push_back({{"map", id}, {"into", *world_main}});
       spdlog::info("map {} joined map {} in the world through the GPS", id, *world_main);
     }
+  }
+
+  // A point that no adjustment held (seen from nearly one direction) may have run off towards infinity: not a
+  // place of the map, and one the map file refuses.
+  {
+    auto lock = map.WriteLock();
+    size_t culled = 0;
+    for (MapPoint* p : map.MapPoints()) {
+      if (p->position().allFinite() && p->position().cwiseAbs().maxCoeff() <= kMaxMapCoordinateM / 10)
+        continue;
+      p->SetBad();
+      map.EraseMapPoint(p);
+      ++culled;
+    }
+    if (culled > 0) spdlog::info("{} map points far beyond the map removed", culled);
   }
 
   // 6. Outputs.
@@ -595,6 +692,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   run_json["maps"] = {{"count", num_maps},
                       {"main_map", main_map},
                       {"place_merges", place_merges},
+                      {"merges_not_confirmed", proposals_rejected},
                       {"merge_events", merge_events},
                       {"gps_joins", joins},
                       {"sessions", session_json}};
