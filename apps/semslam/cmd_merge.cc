@@ -21,6 +21,7 @@ struct MergeArgs {
   std::string vocabulary;
   bool no_place_recognition = false;
   bool no_global_ba = false;
+  bool no_gps_fusion = false;
   int global_ba_window = 1000;
   bool quiet = false;
 };
@@ -33,6 +34,7 @@ void Run(const MergeArgs& args) {
   options.vocabulary = args.vocabulary;
   options.place_recognition = !args.no_place_recognition;
   options.global_ba = !args.no_global_ba;
+  options.gps_fusion = !args.no_gps_fusion;
   options.global_ba_window_keyframes = args.global_ba_window;
   options.show_progress = !args.quiet && !Quiet();
   options.provenance = Provenance();
@@ -58,6 +60,8 @@ void AddMergeCommand(CLI::App& app) {
   cmd->add_flag("--no-place-recognition", args->no_place_recognition,
                 "Join maps by their GPS placement only (no search for shared places)");
   cmd->add_flag("--no-global-ba", args->no_global_ba, "Skip the final bundle adjustment of the merged maps");
+  cmd->add_flag("--no-gps-fusion", args->no_gps_fusion,
+                "Keep the merged map where the merges put it (do not fuse it with every drive's GPS log)");
   cmd->add_option("--global-ba-window", args->global_ba_window,
                   "Keyframes one bundle adjustment optimizes together at most (bounds memory)")
       ->capture_default_str()

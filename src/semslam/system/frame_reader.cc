@@ -8,7 +8,10 @@
 namespace semslam {
 
 FrameReader::FrameReader(const ImageSequence& sequence, bool stereo, size_t max_bad_in_row, bool color)
-    : sequence_(sequence), stereo_(stereo), color_(color && sequence.IsColor()), max_bad_in_row_(max_bad_in_row) {}
+    : sequence_(sequence),
+      stereo_(stereo),
+      color_(color && sequence.IsColor()),
+      max_bad_in_row_(max_bad_in_row) {}
 
 std::optional<FrameImages> FrameReader::Read(size_t frame) {
   try {

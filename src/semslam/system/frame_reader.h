@@ -27,8 +27,8 @@ struct BadFrame {
 
 class FrameReader {
  public:
-  // max_bad_in_row: how many bad frames in a row are tolerated (0: none). color: keep the left image in colour
-  // too (for the segmenter) when the sequence has colour; it is decoded once and converted to grey.
+  // max_bad_in_row: how many bad frames in a row are tolerated (0: none). color: keep the left image in
+  // colour too (for the segmenter) when the sequence has colour; it is decoded once and converted to grey.
   FrameReader(const ImageSequence& sequence, bool stereo, size_t max_bad_in_row, bool color = false);
 
   // The frame's images, or nullopt when one of them cannot be used (warned and counted).

@@ -1,7 +1,7 @@
 #pragma once
-// trajectory.kitti: one pose per frame of a run. KITTI pose files carry no timestamps (evo and the KITTI devkit
-// pair line i with frame i), so a frame without its own pose still gets a line: the best pose known for it
-// (io/trajectory_io.h FillFrameGaps).
+// trajectory.kitti: one pose per frame of a run. KITTI pose files carry no timestamps (evo and the KITTI
+// devkit pair line i with frame i), so a frame without its own pose still gets a line: the best pose known
+// for it (io/trajectory_io.h FillFrameGaps).
 
 #include <cstddef>
 #include <filesystem>
@@ -18,7 +18,8 @@ std::vector<IndexedPose> MapFramePoses(const std::vector<FramePose>& frames);
 
 // Writes one line per frame of [first_frame, end_frame) to `path` and returns where each pose came from;
 // `times`: those frames' timestamps (see FillFrameGaps).
-DenseTrajectory WriteKittiFrameTrajectory(const std::filesystem::path& path, const std::vector<FramePose>& frames,
-                                          size_t first_frame, size_t end_frame, std::span<const double> times);
+DenseTrajectory WriteKittiFrameTrajectory(const std::filesystem::path& path,
+                                          const std::vector<FramePose>& frames, size_t first_frame,
+                                          size_t end_frame, std::span<const double> times);
 
 }  // namespace semslam

@@ -38,10 +38,10 @@ void CheckGpsLog(const GpsLog& log, const std::vector<double>& frame_times) {
     return t + offset >= begin - slack && t + offset <= end + slack;
   });
   if (!overlap) {
-    spdlog::warn("{}: the GPS fixes ({:.3f}..{:.3f} s) do not overlap the frames ({:.3f}..{:.3f} s, offset "
-                 "{:.3f} s): no fix can be matched to a frame, and the map will not be georeferenced",
-                 log.source.string(), begin, end, frame_times.front() + offset, frame_times.back() + offset,
-                 offset);
+    spdlog::warn(
+        "{}: the GPS fixes ({:.3f}..{:.3f} s) do not overlap the frames ({:.3f}..{:.3f} s, offset "
+        "{:.3f} s): no fix can be matched to a frame, and the map will not be georeferenced",
+        log.source.string(), begin, end, frame_times.front() + offset, frame_times.back() + offset, offset);
   }
 }
 
@@ -87,12 +87,14 @@ size_t WarnAboutFarLandmarks(const std::vector<Landmark>& landmarks, const fs::p
                             far[i].landmark->source.ToString(), far[i].distance_m / 1e3);
   }
   if (far.size() == landmarks.size()) {
-    spdlog::warn("{}: none of the {} landmarks lies within {:.0f} km of the GPS track (nearest: {}); a catalogue "
-                 "of another place, or latitude and longitude swapped?",
-                 file.string(), landmarks.size(), far_m / 1e3, examples);
+    spdlog::warn(
+        "{}: none of the {} landmarks lies within {:.0f} km of the GPS track (nearest: {}); a catalogue "
+        "of another place, or latitude and longitude swapped?",
+        file.string(), landmarks.size(), far_m / 1e3, examples);
   } else {
-    spdlog::warn("{}: {} of the {} landmarks lie more than {:.0f} km from the GPS track and will match nothing: {}",
-                 file.string(), far.size(), landmarks.size(), far_m / 1e3, examples);
+    spdlog::warn(
+        "{}: {} of the {} landmarks lie more than {:.0f} km from the GPS track and will match nothing: {}",
+        file.string(), far.size(), landmarks.size(), far_m / 1e3, examples);
   }
   return far.size();
 }

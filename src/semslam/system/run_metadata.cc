@@ -79,7 +79,8 @@ bool NeedsQuotes(const std::string& argument) {
 }  // namespace
 
 std::string VersionLine(const RunProvenance& provenance) {
-  return "semslam " + provenance.version + " (commit " + provenance.commit + ", " + provenance.build_type + ")";
+  return "semslam " + provenance.version + " (commit " + provenance.commit + ", " + provenance.build_type +
+         ")";
 }
 
 std::vector<std::string> ProvenanceLines(const RunProvenance& provenance) {
@@ -115,23 +116,29 @@ nlohmann::json ProvenanceJson(const RunProvenance& provenance) {
 }
 
 nlohmann::json EffectiveConfigJson(const RunOptions& options, const SlamOptions& slam, size_t end_frame) {
-  const std::filesystem::path vocabulary = slam.vocabulary.empty() ? DefaultVocabularyPath() : slam.vocabulary;
-  return {{"sequence", Absolute(options.sequence)},
-          {"output", Absolute(options.output)},
-          {"frames", {options.first_frame, end_frame}},
-          {"mode", slam.mode == SensorMode::kStereo ? "stereo" : "mono"},
-          {"pacing", std::string(PacingName(slam.pacing))},
-          {"segmenter", options.segmenter},
-          {"seed", options.seed},
-          {"gps", Absolute(options.gps)},
-          {"gps_every", options.gps_every},
-          {"gps_fusion", options.gps_fusion},
-          {"landmarks", Absolute(options.landmarks)},
-          {"map_in", Absolute(options.map_in)},
-          {"localization_only", slam.localization_only},
-          {"exclude_dynamic", slam.exclude_dynamic},
-          {"vocabulary", Absolute(vocabulary)},
-          {"slam", YamlToJson(YAML::Load(SlamConfigToYaml(slam)))}};
+  const std::filesystem::path vocabulary =
+      slam.vocabulary.empty() ? DefaultVocabularyPath() : slam.vocabulary;
+  return {
+      {"sequence", Absolute(options.sequence)},
+      {"output", Absolute(options.output)},
+      {"frames", {options.first_frame, end_frame}},
+      {"mode", slam.mode == SensorMode::kStereo ? "stereo" : "mono"},
+      {"pacing", std::string(PacingName(slam.pacing))},
+      {"segmenter", options.segmenter},
+      {"seed", options.seed},
+      {"gps", Absolute(options.gps)},
+      {"gps_every", options.gps_every},
+      {"gps_fusion", options.gps_fusion},
+      {"gps_lever_arm", options.gps_antenna_in_camera_m ? nlohmann::json{options.gps_antenna_in_camera_m->x(),
+                                                                         options.gps_antenna_in_camera_m->y(),
+                                                                         options.gps_antenna_in_camera_m->z()}
+                                                        : nlohmann::json(nullptr)},
+      {"landmarks", Absolute(options.landmarks)},
+      {"map_in", Absolute(options.map_in)},
+      {"localization_only", slam.localization_only},
+      {"exclude_dynamic", slam.exclude_dynamic},
+      {"vocabulary", Absolute(vocabulary)},
+      {"slam", YamlToJson(YAML::Load(SlamConfigToYaml(slam)))}};
 }
 
 }  // namespace semslam

@@ -12,7 +12,8 @@ namespace semslam {
 struct RunOptions;
 struct SlamOptions;
 
-// What only the caller knows: the command line and the binary's version (the library does not know its build).
+// What only the caller knows: the command line and the binary's version (the library does not know its
+// build).
 struct RunProvenance {
   std::vector<std::string> command;  // argv, as given
   std::string version;               // e.g. "0.1.0"
@@ -25,8 +26,9 @@ struct RunProvenance {
 nlohmann::json ProvenanceJson(const RunProvenance& provenance);
 
 // {"sequence" (absolute), "frames" [first, end), "mode", "pacing", "segmenter", "seed", "gps", "gps_every",
-// "gps_fusion", "landmarks", "map_in", "localization_only", "exclude_dynamic", "vocabulary" (resolved), "slam"
-// (every SLAM option by section, as config/default.yaml)}. `slam` is the SlamSystem's effective options.
+// "gps_fusion", "landmarks", "map_in", "localization_only", "exclude_dynamic", "vocabulary" (resolved),
+// "slam" (every SLAM option by section, as config/default.yaml)}. `slam` is the SlamSystem's effective
+// options.
 nlohmann::json EffectiveConfigJson(const RunOptions& options, const SlamOptions& slam, size_t end_frame);
 
 // "semslam 0.1.0 (commit b88fce6a1c2d-dirty, Release)".

@@ -67,7 +67,8 @@ RunOutputDir::RunOutputDir(fs::path dir, const OutputDirOptions& options) : dir_
     throw std::runtime_error(SystemErrorMessage(lock_path, "cannot lock", error));
   }
   // Who holds it, for the message above; writing it also proves that the disk takes data.
-  const std::string holder = fmt::format("pid {}, semslam {}\n", static_cast<long>(::getpid()), options.command);
+  const std::string holder =
+      fmt::format("pid {}, semslam {}\n", static_cast<long>(::getpid()), options.command);
   if (::ftruncate(lock_fd_, 0) != 0 ||
       ::pwrite(lock_fd_, holder.data(), holder.size(), 0) != static_cast<ssize_t>(holder.size()) ||
       ::fsync(lock_fd_) != 0) {
@@ -83,15 +84,16 @@ RunOutputDir::RunOutputDir(fs::path dir, const OutputDirOptions& options) : dir_
     if (free_bytes < options.min_free_bytes) {
       ::close(lock_fd_);
       lock_fd_ = -1;
-      throw std::runtime_error(fmt::format("{}: {}: {:.1f} MiB free, a {} needs at least {} MiB", dir_.string(),
-                                           std::strerror(ENOSPC), static_cast<double>(free_bytes) / (1 << 20),
-                                           options.command, options.min_free_bytes >> 20));
+      throw std::runtime_error(fmt::format(
+          "{}: {}: {:.1f} MiB free, a {} needs at least {} MiB", dir_.string(), std::strerror(ENOSPC),
+          static_cast<double>(free_bytes) / (1 << 20), options.command, options.min_free_bytes >> 20));
     }
   }
 
   // Leftovers of a writer that was killed, then the earlier run itself.
   if (const size_t stale = RemoveStaleTempFiles(dir_); stale > 0) {
-    spdlog::info("{}: removed {} temporary file(s) left by an earlier run that was killed", dir_.string(), stale);
+    spdlog::info("{}: removed {} temporary file(s) left by an earlier run that was killed", dir_.string(),
+                 stale);
   }
   std::vector<fs::path> entries;
   for (const auto& entry : fs::directory_iterator(dir_, ec)) {
@@ -108,19 +110,22 @@ RunOutputDir::RunOutputDir(fs::path dir, const OutputDirOptions& options) : dir_
   };
   if (!HoldsSemslamOutputs(dir_, had_lock_file)) {
     fs::remove(lock_path, ec);  // leave the user's folder as it was
-    refuse(fmt::format("{}: --out is not empty and holds no semslam outputs ({} entries, e.g. {}); choose a new "
-                       "or empty folder",
-                       dir_.string(), entries.size(), entries.front().filename().string()));
+    refuse(
+        fmt::format("{}: --out is not empty and holds no semslam outputs ({} entries, e.g. {}); choose a new "
+                    "or empty folder",
+                    dir_.string(), entries.size(), entries.front().filename().string()));
   }
   if (!options.overwrite) {
-    refuse(fmt::format("{}: --out holds an earlier run ({} entries); pass --overwrite to replace it, or choose "
-                       "another folder",
-                       dir_.string(), entries.size()));
+    refuse(
+        fmt::format("{}: --out holds an earlier run ({} entries); pass --overwrite to replace it, or choose "
+                    "another folder",
+                    dir_.string(), entries.size()));
   }
   for (const fs::path& entry : entries) {
     fs::remove_all(entry, ec);
     if (ec) {
-      const std::string message = SystemErrorMessage(entry, "cannot remove the earlier run's output", ec.value());
+      const std::string message =
+          SystemErrorMessage(entry, "cannot remove the earlier run's output", ec.value());
       ::close(lock_fd_);
       lock_fd_ = -1;
       throw std::runtime_error(message);

@@ -3,10 +3,11 @@
 // written, a full disk or a second run into the same folder stop the run at once instead of losing it at the
 // end.
 //
-// Policy: a new or empty folder is used as it is. A folder that holds an earlier semslam run is refused unless
-// `overwrite` is set, in which case everything in it is removed first (so nothing of the earlier run is mixed
-// into the new outputs). A non-empty folder that semslam did not write is always refused. While a run writes
-// into a folder it holds a lock on DIR/.semslam.lock, and a second run into the same folder is refused.
+// Policy: a new or empty folder is used as it is. A folder that holds an earlier semslam run is refused
+// unless `overwrite` is set, in which case everything in it is removed first (so nothing of the earlier run
+// is mixed into the new outputs). A non-empty folder that semslam did not write is always refused. While a
+// run writes into a folder it holds a lock on DIR/.semslam.lock, and a second run into the same folder is
+// refused.
 
 #include <cstdint>
 #include <filesystem>
@@ -23,8 +24,8 @@ struct OutputDirOptions {
   std::uint64_t min_free_bytes = std::uint64_t{32} << 20;
 };
 
-// The lock file's name (it stays in the folder after the run and marks the folder as semslam's), and the log's
-// (a folder holding only a failed command's log counts as empty).
+// The lock file's name (it stays in the folder after the run and marks the folder as semslam's), and the
+// log's (a folder holding only a failed command's log counts as empty).
 inline constexpr const char* kOutputLockFile = ".semslam.lock";
 inline constexpr const char* kOutputLogFile = "run.log";
 

@@ -147,8 +147,8 @@ double LocalScale(const KeyFrame& kf, const cv::Mat& depth) {
   return *middle;
 }
 
-void Tally(const std::unordered_map<const MapPoint*, Votes>& votes, const std::vector<const MapPoint*>& labelled,
-           SurfaceScores& scores) {
+void Tally(const std::unordered_map<const MapPoint*, Votes>& votes,
+           const std::vector<const MapPoint*>& labelled, SurfaceScores& scores) {
   for (const auto& [point, vote] : votes) {
     const auto best = std::max_element(vote.count.begin(), vote.count.end());
     const int true_class = static_cast<int>(best - vote.count.begin());

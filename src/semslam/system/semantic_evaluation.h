@@ -58,8 +58,9 @@ struct SemanticEvaluation {
 // InputError naming a label image that is missing or of the wrong size.
 SemanticEvaluation EvaluateSemantics(const Map& map, const std::filesystem::path& label_dir);
 
-// The truth the 3D measure reads: per frame a trainId image and a depth image (uint16, metres * 256, 0 = sky),
-// the true camera poses (matched to keyframes by timestamp), and the map's alignment with the truth frame.
+// The truth the 3D measure reads: per frame a trainId image and a depth image (uint16, metres * 256, 0 =
+// sky), the true camera poses (matched to keyframes by timestamp), and the map's alignment with the truth
+// frame.
 struct SurfaceTruth {
   std::filesystem::path label_dir;
   std::filesystem::path depth_dir;
@@ -87,8 +88,8 @@ struct SurfaceScores {
 };
 
 struct SurfaceEvaluation {
-  // Each keyframe's estimated camera put onto its true camera (monocular: at the keyframe's scale): a point is
-  // judged where the cameras that built the map see it. The headline figure.
+  // Each keyframe's estimated camera put onto its true camera (monocular: at the keyframe's scale): a point
+  // is judged where the cameras that built the map see it. The headline figure.
   SurfaceScores per_frame;
   // The whole map aligned once (the trajectory's Sim(3)/SE(3) against the truth): the trajectory's error then
   // moves each projection too (a few pixels), which at contact boundaries (a car on the road, a pole on the

@@ -20,6 +20,8 @@
 #include "semslam/core/progress.h"
 #include "semslam/core/timing.h"
 #include "semslam/eval/trajectory_metrics.h"
+#include "semslam/geo/gps.h"
+#include "semslam/geo/gps_fusion.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
 #include "semslam/landmarks/catalogue.h"
@@ -32,6 +34,7 @@
 #include "semslam/report/html_report.h"
 #include "semslam/sim/scene_file.h"
 #include "semslam/system/atlas_outputs.h"
+#include "semslam/system/merge_verifier.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/slam_system.h"
 
@@ -53,7 +56,20 @@ struct InputSession {
   std::string sequence;  // its sequence folder, for the ground truth
   std::string camera;
   fs::path frames_csv;  // each frame's map and pose in it, as the input's map holds them
+  // The GPS log its run was given (empty: none), one fix every gps_every frames, and the antenna's place in
+  // the camera frame when the run was told it.
+  std::string gps;
+  int gps_every = 30;
+  std::optional<Eigen::Vector3d> lever_arm;
 };
+
+std::optional<Eigen::Vector3d> LeverArmOf(const nlohmann::json& j) {
+  if (!j.contains("gps_lever_arm") || j["gps_lever_arm"].is_null()) return std::nullopt;
+  const auto v = j["gps_lever_arm"].get<std::vector<double>>();
+  if (v.size() != 3)
+    throw nlohmann::json::other_error::create(501, "gps_lever_arm: 3 numbers expected", nullptr);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
 
 // One run folder given to merge.
 struct InputRun {
@@ -93,14 +109,19 @@ InputRun ReadInputRun(const fs::path& dir) {
         if (!s.contains("frames_csv")) continue;
         run.sessions[s.at("id").get<std::uint32_t>()] = {s.value("sequence", std::string()),
                                                          s.value("camera", std::string()),
-                                                         run.dir / s.at("frames_csv").get<std::string>()};
+                                                         run.dir / s.at("frames_csv").get<std::string>(),
+                                                         s.value("gps", std::string()),
+                                                         s.value("gps_every", 30),
+                                                         LeverArmOf(s)};
       }
     } else {
       const std::string landmarks = j.at("config").value("landmarks", std::string());
       if (!landmarks.empty()) run.catalogues.emplace_back(landmarks);
       if (fs::is_regular_file(dir / "frames.csv")) {
-        run.sessions[kLastSession] = {j.at("sequence").get<std::string>(), j.value("camera", std::string()),
-                                      run.dir / "frames.csv"};
+        const nlohmann::json& config = j.at("config");
+        run.sessions[kLastSession] = {
+            j.at("sequence").get<std::string>(), j.value("camera", std::string()), run.dir / "frames.csv",
+            config.value("gps", std::string()),  config.value("gps_every", 30),    LeverArmOf(config)};
       }
     }
   } catch (const nlohmann::json::exception& e) {
@@ -155,6 +176,122 @@ struct SessionRecord {
   std::map<std::uint32_t, AnchorsByFrame> anchors;  // by the map id the keyframes had when loaded
   std::vector<FramePose> frames;                    // moved, after the merge
 };
+
+// A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
+// of theirs left.
+std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored) {
+  std::vector<FramePose> frames;
+  if (!s.input) {
+    for (const auto& [loaded_map, anchors] : s.anchors) {
+      for (const auto& [frame, anchor] : anchors) {
+        if (anchor.keyframe->is_bad()) continue;
+        frames.push_back({frame, static_cast<long long>(anchor.keyframe->id()), anchor.keyframe->timestamp(),
+                          anchor.keyframe->world_from_camera(), anchor.keyframe->map_id(), false});
+      }
+    }
+    std::sort(frames.begin(), frames.end(),
+              [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+    return frames;
+  }
+  for (const FramePose& f : ReadFramesCsv(s.input->frames_csv)) {
+    const auto anchors = s.anchors.find(f.map_id + s.first_map_id);
+    const std::optional<FramePose> moved =
+        anchors != s.anchors.end() ? FollowAnchor(anchors->second, f) : std::nullopt;
+    if (moved) {
+      frames.push_back(*moved);
+    } else if (unanchored != nullptr) {
+      ++*unanchored;
+    }
+  }
+  return frames;
+}
+
+// Every drive's GPS fixes in one pose graph with the merged map's own links (geo/gps_fusion.h), the drives
+// one after another in time and frame index: each merge took one map's place in the world and the others
+// followed by what vision saw, so the fixes of all drives now place the whole map together. The map is moved
+// where the fusion put its keyframes. Returns run.json's figures, or null when no drive had fixes enough.
+nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
+                                   const std::vector<SessionRecord>& sessions, const EnuFrame& world,
+                                   bool stereo) {
+  GpsFusionInput input;
+  input.enu_from_map = Sim3d();  // the map is in the world already
+  GpsFusionOptions options;
+  options.alignment.estimate_scale = !stereo;
+  options.sampling.time_offset_s = 0.0;  // each drive's fixes are moved into its frames' time below
+  bool any = false;
+  for (size_t k = 0; k < sessions.size(); ++k) {
+    const SessionRecord& s = sessions[k];
+    if (!s.input || s.input->gps.empty()) continue;
+    std::vector<FramePose> frames = SessionFrames(s, nullptr);
+    std::erase_if(frames, [&](const FramePose& f) { return f.map_id != main_map || f.predicted; });
+    if (frames.size() < 2) continue;
+    GpsLog log;
+    try {
+      log = ReadGps(s.input->gps);
+      if (log.times_are_frames) {
+        const std::unique_ptr<ImageSequence> sequence =
+            OpenSequence(s.input->sequence, {s.input->camera, false});
+        TimeFixesByFrame(log, FrameTimestamps(*sequence, 0, sequence->size()));
+      }
+    } catch (const std::exception& e) {
+      spdlog::warn("session {}: its GPS log is not used: {}", s.id, e.what());
+      continue;
+    }
+    std::vector<double> times;
+    for (const FramePose& f : frames) times.push_back(f.timestamp);
+    const double offset = GuessTimeOffset(log.fixes, times);
+    const double shift = 1e6 * static_cast<double>(k + 1);
+    const size_t index_shift = 10'000'000 * (k + 1);
+    for (FramePose f : frames) {
+      f.timestamp += shift;
+      f.frame_index += index_shift;
+      input.frames.push_back(f);
+    }
+    {
+      auto lock = slam.map().ReadLock();
+      for (const auto& [loaded_map, anchors] : s.anchors) {
+        for (const auto& [frame, anchor] : anchors) {
+          const KeyFrame* kf = anchor.keyframe;
+          if (kf->is_bad() || kf->map_id() != main_map) continue;
+          input.keyframes.push_back({frame + index_shift, static_cast<long long>(kf->id()),
+                                     kf->timestamp() + shift, kf->world_from_camera(), main_map, false});
+        }
+      }
+    }
+    for (GpsFix fix : log.fixes) {
+      fix.timestamp += shift - offset;
+      input.fixes.push_back(fix);
+    }
+    if (!any && s.input->lever_arm) options.antenna_in_camera_m = *s.input->lever_arm;
+    options.sampling.every_n_frames = s.input->gps_every;
+    any = true;
+  }
+  if (!any) return nullptr;
+  std::sort(input.keyframes.begin(), input.keyframes.end(),
+            [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+  std::stable_sort(input.fixes.begin(), input.fixes.end(),
+                   [](const GpsFix& a, const GpsFix& b) { return a.timestamp < b.timestamp; });
+  input.edges = slam.KeyFrameEdges(input.keyframes);
+  const std::optional<GpsFusionResult> result = FuseGps(input, world, options);
+  if (!result) {
+    spdlog::warn("the drives' GPS fixes do not place the merged map: it stays where the merges put it");
+    return nullptr;
+  }
+  std::unordered_map<std::uint64_t, Sim3d> world_from_keyframe;
+  for (size_t i = 0; i < input.keyframes.size(); ++i) {
+    world_from_keyframe[static_cast<std::uint64_t>(input.keyframes[i].keyframe_id)] =
+        result->keyframe_enu_from_camera[i];
+  }
+  {
+    auto lock = slam.map().WriteLock();
+    MoveMapIntoWorld(slam.map(), main_map, world_from_keyframe, result->georeference.enu_from_map);
+  }
+  spdlog::info("the merged map fused with its drives' GPS: {} of {} fixes kept, {:.2f} m RMSE",
+               result->num_inliers, result->samples.size(), result->inlier_rmse_m);
+  return {{"samples", result->samples.size()},
+          {"inliers", result->num_inliers},
+          {"fit_rmse_m", result->inlier_rmse_m}};
+}
 
 std::string SessionFolderName(const MapSession& s) {
   std::string name = s.name.empty() ? std::string("session") : s.name;
@@ -219,82 +356,6 @@ Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_
   }
   return t;
 }
-
-// Which merges place recognition may make between saved maps. A place seen on two drives passes loop
-// closing's geometric checks; so does a look-alike (towns repeat their facades), and between maps that share
-// no odometry nothing else would tell. So: between two maps in the world, the merge must agree with where
-// their GPS placed them; otherwise a second place, out of sight of the first (no covisibility), must give the
-// same transform.
-class MergeVerifier {
- public:
-  explicit MergeVerifier(const std::set<std::uint32_t>& world_maps) : world_maps_(world_maps) {}
-
-  bool operator()(const KeyFrame& current, const KeyFrame& matched, const Sim3d& matched_from_current_map) {
-    const Eigen::Vector3d centre = current.world_from_camera().translation;
-    if (world_maps_.count(current.map_id()) && world_maps_.count(matched.map_id())) {
-      const double shift_m = (matched_from_current_map * centre - centre).norm();
-      const double turn_deg = Eigen::AngleAxisd(matched_from_current_map.rotation).angle() * 180.0 / M_PI;
-      const bool agrees = shift_m <= kMaxWorldShiftM && turn_deg <= kMaxWorldTurnDeg &&
-                          std::abs(std::log(matched_from_current_map.scale)) <= kMaxWorldLogScale;
-      spdlog::info(
-          "merge of map {} into map {}: {} with their GPS placement (it moves keyframe {} by {:.1f} m, "
-          "{:.1f} deg, scale {:.3f})",
-          current.map_id(), matched.map_id(), agrees ? "agrees" : "disagrees", current.id(), shift_m,
-          turn_deg, matched_from_current_map.scale);
-      if (!agrees) ++rejected_;
-      return agrees;
-    }
-    const std::pair<std::uint32_t, std::uint32_t> pair{current.map_id(), matched.map_id()};
-    std::vector<Proposal>& earlier = proposals_[pair];
-    for (const Proposal& p : earlier) {
-      const std::vector<KeyFrame*>& covisibles = current.Covisibles();
-      if (p.keyframe == &current || p.keyframe->is_bad() ||
-          std::find(covisibles.begin(), covisibles.end(), p.keyframe) != covisibles.end()) {
-        continue;
-      }
-      // Both transforms applied to both places: how far apart they put them, against the distance between
-      // the places (the matched map's units).
-      const Eigen::Vector3d other = p.keyframe->world_from_camera().translation;
-      const double span = (matched_from_current_map * centre - matched_from_current_map * other).norm();
-      const double disagreement = std::max((matched_from_current_map * centre - p.transform * centre).norm(),
-                                           (matched_from_current_map * other - p.transform * other).norm());
-      const double turn_deg =
-          Eigen::AngleAxisd(matched_from_current_map.rotation * p.transform.rotation.inverse()).angle() *
-          180.0 / M_PI;
-      if (span > 0.0 && disagreement <= kMaxRelativeDisagreement * span &&
-          turn_deg <= kMaxTurnDisagreementDeg) {
-        spdlog::info(
-            "merge of map {} into map {}: keyframes {} and {}, out of sight of each other, agree ({:.1f} % "
-            "of the {:.1f} units between them, {:.1f} deg)",
-            current.map_id(), matched.map_id(), p.keyframe->id(), current.id(), 100.0 * disagreement / span,
-            span, turn_deg);
-        proposals_.clear();
-        return true;
-      }
-    }
-    spdlog::info("merge of map {} into map {} at keyframe {}: kept until another place confirms it",
-                 current.map_id(), matched.map_id(), current.id());
-    earlier.push_back({&current, matched_from_current_map});
-    ++rejected_;
-    return false;
-  }
-
-  int rejected() const { return rejected_; }
-
- private:
-  static constexpr double kMaxWorldShiftM = 10.0;  // GPS σ of metres, a fused map's error of a few
-  static constexpr double kMaxWorldTurnDeg = 10.0;
-  static constexpr double kMaxWorldLogScale = 0.1;
-  static constexpr double kMaxRelativeDisagreement = 0.1;
-  static constexpr double kMaxTurnDisagreementDeg = 5.0;
-  struct Proposal {
-    const KeyFrame* keyframe;
-    Sim3d transform;
-  };
-  const std::set<std::uint32_t>& world_maps_;
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Proposal>> proposals_;
-  int rejected_ = 0;
-};
 
 }  // namespace
 
@@ -480,6 +541,11 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     }
   }
 
+  // 6. The merged map in the world: placed by every drive's GPS.
+  nlohmann::json gps_fusion = nullptr;
+  if (world_main && options.gps_fusion)
+    gps_fusion = FuseSessionsWithGps(slam, *world_main, sessions, *world, stereo);
+
   // A point that no adjustment held (seen from nearly one direction) may have run off towards infinity: not a
   // place of the map, and one the map file refuses.
   {
@@ -495,7 +561,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     if (culled > 0) spdlog::info("{} map points far beyond the map removed", culled);
   }
 
-  // 6. Outputs.
+  // 7. Outputs.
   std::uint32_t main_map = 0;
   size_t num_keyframes = 0, num_points = 0, num_maps = 0;
   {
@@ -536,20 +602,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       std::sort(keyframes.begin(), keyframes.end(),
                 [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
       size_t unanchored = 0;
-      if (s.input) {
-        for (const FramePose& f : ReadFramesCsv(s.input->frames_csv)) {
-          const auto anchors = s.anchors.find(f.map_id + s.first_map_id);
-          const std::optional<FramePose> moved =
-              anchors != s.anchors.end() ? FollowAnchor(anchors->second, f) : std::nullopt;
-          if (moved) {
-            s.frames.push_back(*moved);
-          } else {
-            ++unanchored;
-          }
-        }
-      } else {
-        s.frames = keyframes;  // nothing finer is known
-      }
+      s.frames = SessionFrames(s, &unanchored);
       std::map<std::uint32_t, size_t> frames_per_map;
       for (const FramePose& f : s.frames) ++frames_per_map[f.map_id];
       const size_t in_main = frames_per_map.count(main_map) ? frames_per_map.at(main_map) : 0;
@@ -564,6 +617,11 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       if (s.input) {
         j["sequence"] = s.input->sequence;
         j["camera"] = s.input->camera;
+        j["gps"] = s.input->gps;
+        j["gps_every"] = s.input->gps_every;
+        if (s.input->lever_arm) {
+          j["gps_lever_arm"] = {s.input->lever_arm->x(), s.input->lever_arm->y(), s.input->lever_arm->z()};
+        }
       }
       const Trajectory trajectory = ToTrajectory(s.frames, main_map);
       WriteTumTrajectory(options.output / folder / "trajectory.tum", trajectory);
@@ -697,6 +755,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
                       {"gps_joins", joins},
                       {"sessions", session_json}};
   if (city_ate) run_json["ate_rmse_city"] = *city_ate;
+  run_json["gps_fusion"] = gps_fusion;
   run_json["ate_alignment"] = AlignmentName(alignment);
   run_json["classes"] = ClassCountsJson(CountLabels(semantic_points));
   run_json["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());

@@ -14,7 +14,11 @@
 //     keeps the world frame.
 //  4. The final bundle adjustment of each map (windowed as the run's is: bounded in memory).
 //  5. Maps in the world that no place tied together are joined by their GPS placement alone.
-//  6. The outputs of a run, for the whole atlas: map.semslam (the city map, loadable by `run --map-in`,
+//  6. The map in the world is fused with every drive's GPS fixes (its run's log) in one pose graph with the
+//  map's
+//     own links, and moved where that puts it: each merge took one map's place and the others followed what
+//     vision saw.
+//  7. The outputs of a run, for the whole atlas: map.semslam (the city map, loadable by `run --map-in`,
 //     `localize` and the Python module), sessions/<id>-<name>/trajectory.tum (each drive's frames in the
 //     merged map's frame, and trajectory_wgs84.csv in the world), semantic_map.ply, landmarks, topology,
 //     objects, plots, report.html and run.json ("maps": {"sessions": [...]}).
@@ -35,6 +39,7 @@ struct SessionMergeOptions {
   std::filesystem::path vocabulary;  // empty: the default vocabulary
   bool place_recognition = true;     // false: maps join through their GPS placement only
   bool global_ba = true;             // the final bundle adjustment of each merged map
+  bool gps_fusion = true;            // the merged map fused with every drive's GPS log (its run's --gps)
   int global_ba_iterations = 20;
   int global_ba_window_keyframes = 1000;
   bool show_progress = true;

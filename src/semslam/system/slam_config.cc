@@ -116,15 +116,16 @@ SourceLocation Where(const std::filesystem::path& file, const YAML::Mark& mark) 
   return {file, mark.line >= 0 ? mark.line + 1 : 0};
 }
 
-// A map starts from init_min_matches matches between two frames: fewer features than that per frame and no run
-// could ever start one (it would track nothing, silently).
+// A map starts from init_min_matches matches between two frames: fewer features than that per frame and no
+// run could ever start one (it would track nothing, silently).
 void CheckFeatureBudget(const SlamOptions& o, const std::filesystem::path& file,
                         const std::map<std::string, int>& lines) {
   const auto where = [&](const std::string& field) {
     const auto it = lines.find(field);
     return SourceLocation{file, it == lines.end() ? 0 : it->second};
   };
-  const int init_features = o.tracker.init_num_features > 0 ? o.tracker.init_num_features : 2 * o.tracker.orb.num_features;
+  const int init_features =
+      o.tracker.init_num_features > 0 ? o.tracker.init_num_features : 2 * o.tracker.orb.num_features;
   if (o.tracker.orb.num_features < o.tracker.init_min_matches) {
     throw InputError(where("features.num_features"), "features.num_features",
                      fmt::format("{} features per frame are fewer than the {} matches a map needs to start "
@@ -132,10 +133,11 @@ void CheckFeatureBudget(const SlamOptions& o, const std::filesystem::path& file,
                                  o.tracker.orb.num_features, o.tracker.init_min_matches));
   }
   if (init_features < o.tracker.init_min_matches) {
-    throw InputError(where("features.init_num_features"), "features.init_num_features",
-                     fmt::format("{} features for initialization are fewer than the {} matches a map needs to "
-                                 "start (tracking.init_min_matches)",
-                                 init_features, o.tracker.init_min_matches));
+    throw InputError(
+        where("features.init_num_features"), "features.init_num_features",
+        fmt::format("{} features for initialization are fewer than the {} matches a map needs to "
+                    "start (tracking.init_min_matches)",
+                    init_features, o.tracker.init_min_matches));
   }
 }
 
