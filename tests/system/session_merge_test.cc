@@ -34,9 +34,9 @@ Artifact Merge(const std::string& name, const std::vector<Artifact>& runs,
 
 Artifact TwoDrives() { return Merge("merge_two_drives", {MonoRun(), SecondDriveMonoRun()}, {}); }
 
-// Each session of a merge: every frame of its drive's run in the one map, and in the world about as near the
-// truth as its own run put it (measured: 1.000-1.009 times; 1.64 m, as the runs' 7 GPS samples of 1 m noise
-// give).
+// Each session of a merge: every frame of its drive's run in the one map, and in the world nearer the truth
+// than its own run put it: the merged map is fused with both drives' GPS (measured: 0.45-0.50 times its own
+// run's error, which is 1.64 m from 7 fixes of 1 m noise).
 void ExpectEverySessionWhole(const nlohmann::json& run, const std::vector<Artifact>& drives) {
   const nlohmann::json& sessions = run["maps"]["sessions"];
   ASSERT_EQ(sessions.size(), drives.size());
@@ -49,7 +49,7 @@ void ExpectEverySessionWhole(const nlohmann::json& run, const std::vector<Artifa
     EXPECT_EQ(s["frames_without_keyframe"].get<int>(), 0) << k;
     ASSERT_TRUE(s.contains("world_rmse_m")) << k;
     EXPECT_LE(s["world_rmse_m"].get<double>(),
-              1.05 * own["geo_evaluation"]["trajectory_ate_rmse_m"].get<double>())
+              0.55 * own["geo_evaluation"]["trajectory_ate_rmse_m"].get<double>())
         << k;
   }
 }
@@ -68,7 +68,7 @@ TEST(SessionMerge, TwoDrivesThroughOneTownBecomeOneMapWithASessionEach) {
   EXPECT_TRUE(run["maps"]["gps_joins"].empty());
   ExpectEverySessionWhole(run, {first, second});
   // Against one alignment of both drives together, each is about where its own alignment puts it (measured:
-  // 1.10 and 1.20 times).
+  // 1.12 and 1.28 times).
   for (const nlohmann::json& s : run["maps"]["sessions"]) {
     const double own = ReadJson(fs::path(s["run"].get<std::string>()) / "run.json")["ate_rmse"].get<double>();
     EXPECT_LE(s["ate_rmse_city"].get<double>(), 1.5 * own) << s["name"];

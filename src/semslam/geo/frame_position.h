@@ -17,6 +17,8 @@ struct FramePosition {
   long long keyframe_id = -1;                              // the map's keyframe id when this is a keyframe
   double timestamp = 0.0;                                  // seconds, frame time base
   Eigen::Vector3d map_position = Eigen::Vector3d::Zero();  // camera centre, map frame
+  std::uint32_t segment =
+      0;  // the drive it belongs to, of several one after another (a merged map's sessions)
 };
 
 using FramePositions = std::vector<FramePosition>;
@@ -29,9 +31,10 @@ struct FramePose {
   Rigid3d world_from_camera;  // map_from_camera; its translation is the camera centre
   std::uint32_t map_id = 0;   // which map of the atlas the pose is in (see map/map.h)
   bool predicted = false;     // not tracked: the motion model's prediction while tracking was lost
+  std::uint32_t segment = 0;  // as FramePosition's
 
   FramePosition Position() const {
-    return FramePosition{frame_index, keyframe_id, timestamp, world_from_camera.translation};
+    return FramePosition{frame_index, keyframe_id, timestamp, world_from_camera.translation, segment};
   }
 };
 

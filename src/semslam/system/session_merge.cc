@@ -119,9 +119,13 @@ InputRun ReadInputRun(const fs::path& dir) {
       if (!landmarks.empty()) run.catalogues.emplace_back(landmarks);
       if (fs::is_regular_file(dir / "frames.csv")) {
         const nlohmann::json& config = j.at("config");
-        run.sessions[kLastSession] = {
-            j.at("sequence").get<std::string>(), j.value("camera", std::string()), run.dir / "frames.csv",
-            config.value("gps", std::string()),  config.value("gps_every", 30),    LeverArmOf(config)};
+        // The sequence as the run was given it (run.json's own "sequence" is the folder of its images).
+        run.sessions[kLastSession] = {config.value("sequence", j.at("sequence").get<std::string>()),
+                                      j.value("camera", std::string()),
+                                      run.dir / "frames.csv",
+                                      config.value("gps", std::string()),
+                                      config.value("gps_every", 30),
+                                      LeverArmOf(config)};
       }
     }
   } catch (const nlohmann::json::exception& e) {
@@ -674,11 +678,13 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
         for (FramePose f : s.frames) {
           if (f.map_id != main_map || f.predicted) continue;
           f.frame_index += offset;
+          f.segment = static_cast<std::uint32_t>(k);
           geo.frames.push_back(f);
         }
         for (FramePose f : keyframes) {
           if (f.map_id != main_map) continue;
           f.frame_index += offset;
+          f.segment = static_cast<std::uint32_t>(k);
           geo.keyframes.push_back(f);
         }
       }

@@ -67,8 +67,11 @@ struct Pass {
   int keyframe = 0;
 };
 
-// Passes of the path near `anchor` (horizontal): a pass begins within `radius` and ends beyond 1.5 radius.
-std::vector<Pass> FindPasses(const Points3d& points, const Path& path, const Eigen::Vector3d& anchor,
+// Passes of the path near `anchor` (horizontal): a pass begins within `radius` and ends beyond 1.5 radius, or
+// where the path jumps to another drive (`segments`: each keyframe's; the stretch between two drives is not
+// driven).
+std::vector<Pass> FindPasses(const Points3d& points, const Path& path,
+                             const std::vector<std::uint32_t>& segments, const Eigen::Vector3d& anchor,
                              double radius) {
   std::vector<Pass> passes;
   const Eigen::Vector2d a = anchor.head<2>();
@@ -88,6 +91,12 @@ std::vector<Pass> FindPasses(const Points3d& points, const Path& path, const Eig
     consider(0.0, (points[0].head<2>() - a).norm(), 0);
   }
   for (size_t k = 0; k + 1 < points.size(); ++k) {
+    if (segments[k] != segments[k + 1]) {
+      consider(path.arc()[k], (points[k].head<2>() - a).norm(), static_cast<int>(k));
+      if (current) passes.push_back(*current);
+      current.reset();
+      continue;
+    }
     const Eigen::Vector2d p = points[k].head<2>(), q = points[k + 1].head<2>();
     const Eigen::Vector2d d = q - p;
     const double len2 = d.squaredNorm();
@@ -201,6 +210,15 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
     points.push_back(georeference.MapToEnu(k.map_position));
   }
   const Path path(points);
+  // Each drive's stretch of the path (arc length): turn windows stay within it.
+  std::vector<std::uint32_t> segments;
+  for (const FramePosition& k : keyframes) segments.push_back(k.segment);
+  std::vector<double> segment_start(keyframes.size()), segment_end(keyframes.size());
+  for (size_t k = 0; k < keyframes.size(); ++k)
+    segment_start[k] = k > 0 && segments[k] == segments[k - 1] ? segment_start[k - 1] : path.arc()[k];
+  for (size_t k = keyframes.size(); k-- > 0;)
+    segment_end[k] =
+        k + 1 < keyframes.size() && segments[k] == segments[k + 1] ? segment_end[k + 1] : path.arc()[k];
 
   // 1. Heading change at each keyframe, and turn events at the peaks of runs above the threshold.
   map.keyframes.resize(keyframes.size());
@@ -208,7 +226,7 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
   for (size_t k = 0; k < keyframes.size(); ++k) {
     const double s = path.arc()[k];
     map.keyframes[k] = TopoKeyframe{keyframes[k], points[k], s, 0.0};
-    if (s - options.turn_window_m < 0 || s + options.turn_window_m > path.length()) continue;
+    if (s - options.turn_window_m < segment_start[k] || s + options.turn_window_m > segment_end[k]) continue;
     const Eigen::Vector2d before = (points[k] - path.At(s - options.turn_window_m)).head<2>();
     const Eigen::Vector2d after = (path.At(s + options.turn_window_m) - points[k]).head<2>();
     if (before.norm() < 1e-3 * options.turn_window_m || after.norm() < 1e-3 * options.turn_window_m) continue;
@@ -318,13 +336,14 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
   struct Visit {
     double arc;
     int node;
+    int keyframe;
   };
   std::vector<Visit> visits;
   for (TopoNode& n : map.nodes) {
-    for (const Pass& pass : FindPasses(points, path, n.enu, options.fuse_distance_m)) {
+    for (const Pass& pass : FindPasses(points, path, segments, n.enu, options.fuse_distance_m)) {
       n.visit_arc_m.push_back(pass.arc);
       n.visit_keyframes.push_back(pass.keyframe);
-      visits.push_back({pass.arc, n.id});
+      visits.push_back({pass.arc, n.id, pass.keyframe});
     }
   }
   std::sort(visits.begin(), visits.end(),
@@ -334,6 +353,8 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
     const Visit& a = visits[i - 1];
     const Visit& b = visits[i];
     if (a.node == b.node) continue;
+    // Consecutive visits of different drives: nothing was driven between them.
+    if (segments[static_cast<size_t>(a.keyframe)] != segments[static_cast<size_t>(b.keyframe)]) continue;
     const double length = b.arc - a.arc;
     const std::pair<int, int> key{std::min(a.node, b.node), std::max(a.node, b.node)};
     const auto it = edge_of_pair.find(key);

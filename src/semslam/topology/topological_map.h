@@ -17,6 +17,8 @@
 //  one
 //     whose polyline lies within `street_max_distance_m` of more than half of the edge's polyline (sampled
 //     every 2 m); the most covering one when several do; none when no street does.
+// Several drives one after another (FramePosition::segment, a merged map's sessions) are kept apart: turn windows
+// stay within a drive, and neither a pass nor an edge spans the step from one drive to the next.
 // Edges are traversable both ways (a person walks back; streets are taken as two-way).
 
 #include <optional>
