@@ -95,7 +95,7 @@ InputRun ReadInputRun(const fs::path& dir) {
   InputRun run;
   run.dir = fs::absolute(dir);
   if (!fs::is_regular_file(dir / "map.semslam"))
-    throw InputError(dir / "map.semslam", "missing: the run saved no map (run it without --no-save-map)");
+    throw InputError(dir / "map.semslam", "missing: not a run folder with a saved map");
   const fs::path json_path = dir / "run.json";
   const nlohmann::json j = ReadJsonFile(json_path);
   try {
