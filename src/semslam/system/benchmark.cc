@@ -13,21 +13,12 @@
 #include "semslam/core/error.h"
 #include "semslam/core/text_reader.h"
 #include "semslam/core/timing.h"
+#include "semslam/system/run_metadata.h"
 
 extern char** environ;
 
 namespace semslam {
 namespace {
-
-nlohmann::json ReadJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path, fmt::format("not valid JSON: {}", e.what()));
-  }
-}
 
 double Module(const nlohmann::json& timing, const char* module, const char* field) {
   return timing.contains(module) ? timing[module].value(field, 0.0) : 0.0;
@@ -57,8 +48,8 @@ void BenchOptions::Check() const {
 }
 
 BenchRun ReadBenchRun(const std::filesystem::path& run_dir) {
-  const nlohmann::json run = ReadJson(run_dir / "run.json");
-  const nlohmann::json timing = ReadJson(run_dir / "timing.json");
+  const nlohmann::json run = ReadJsonFile(run_dir / "run.json");
+  const nlohmann::json timing = ReadJsonFile(run_dir / "timing.json");
   BenchRun r;
   r.directory = run_dir;
   r.frames = run.value("frames", size_t{0});

@@ -11,6 +11,7 @@
 #include "semslam/core/timing.h"
 #include "semslam/sim/dataset_writer.h"
 #include "semslam/system/localizer.h"
+#include "semslam/system/run_metadata.h"
 #include "semslam/system/sequence_runner.h"
 #include "semslam/topology/routing.h"
 
@@ -28,12 +29,6 @@ void RenderDrive(const DemoOptions& options, int frames, std::uint64_t traffic_s
   sim::DatasetOptions dataset;
   dataset.progress = options.show_progress;
   sim::WriteDataset(city, out, dataset);
-}
-
-nlohmann::json ReadJson(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open");
-  return nlohmann::json::parse(in);
 }
 
 }  // namespace
@@ -84,7 +79,7 @@ DemoSummary RunDemo(const DemoOptions& options) {
   summary.label_accuracy = run_summary.label_accuracy;
   summary.localized_within_1m = localize_summary.within_1m;
   summary.nearest_landmark_right = localize_summary.nearest_landmark_right;
-  const nlohmann::json run_json = ReadJson(run.output / "run.json");
+  const nlohmann::json run_json = ReadJsonFile(run.output / "run.json");
   summary.path_length_m = run_json.value("path_length_m", 0.0);
 
   // A route between the first and the last landmark of the topological map.

@@ -1,12 +1,15 @@
 #include "semslam/system/run_metadata.h"
 
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "semslam/core/error.h"
 #include "semslam/place/vocabulary.h"
 #include "semslam/system/sequence_runner.h"
 #include "semslam/system/slam_config.h"
@@ -100,6 +103,16 @@ std::string ShellQuote(const std::vector<std::string>& arguments) {
     line += '\'';
   }
   return line;
+}
+
+nlohmann::json ReadJsonFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot be read");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path, fmt::format("not valid JSON: {}", e.what()));
+  }
 }
 
 nlohmann::json ProvenanceJson(const RunProvenance& provenance) {

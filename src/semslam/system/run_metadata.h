@@ -3,6 +3,7 @@
 // version and commit, when and where it ran, and every option it used (the SLAM options after the sensor mode
 // set its parts, in the format `--config` reads).
 
+#include <filesystem>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
@@ -24,6 +25,10 @@ struct RunProvenance {
 // {"command", "command_line", "version", "commit", "build_type", "date" (UTC, ISO 8601), "host_cores",
 // "working_directory"}.
 nlohmann::json ProvenanceJson(const RunProvenance& provenance);
+
+// A JSON file of a run folder (run.json, timing.json); InputError naming the file when it cannot be read or
+// is not JSON.
+nlohmann::json ReadJsonFile(const std::filesystem::path& path);
 
 // {"sequence" (absolute), "frames" [first, end), "mode", "pacing", "segmenter", "seed", "gps", "gps_every",
 // "gps_fusion", "landmarks", "map_in", "localization_only", "exclude_dynamic", "vocabulary" (resolved),

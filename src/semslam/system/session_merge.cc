@@ -81,16 +81,6 @@ struct InputRun {
 };
 constexpr std::uint32_t kLastSession = UINT32_MAX;
 
-nlohmann::json ReadJsonFile(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot be read (is this a semslam run folder?)");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path, fmt::format("malformed JSON: {}", e.what()));
-  }
-}
-
 InputRun ReadInputRun(const fs::path& dir) {
   InputRun run;
   run.dir = fs::absolute(dir);
@@ -183,20 +173,24 @@ struct SessionRecord {
 
 // A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
 // of theirs left.
-std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored) {
-  std::vector<FramePose> frames;
-  if (!s.input) {
-    for (const auto& [loaded_map, anchors] : s.anchors) {
-      for (const auto& [frame, anchor] : anchors) {
-        if (anchor.keyframe->is_bad()) continue;
-        frames.push_back({frame, static_cast<long long>(anchor.keyframe->id()), anchor.keyframe->timestamp(),
-                          anchor.keyframe->world_from_camera(), anchor.keyframe->map_id(), false});
-      }
+// A session's good keyframes where the atlas holds them now, in frame order.
+std::vector<FramePose> SessionKeyFrames(const SessionRecord& s) {
+  std::vector<FramePose> keyframes;
+  for (const auto& [loaded_map, anchors] : s.anchors) {
+    for (const auto& [frame, anchor] : anchors) {
+      if (anchor.keyframe->is_bad()) continue;
+      keyframes.push_back({frame, static_cast<long long>(anchor.keyframe->id()), anchor.keyframe->timestamp(),
+                           anchor.keyframe->world_from_camera(), anchor.keyframe->map_id(), false});
     }
-    std::sort(frames.begin(), frames.end(),
-              [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
-    return frames;
   }
+  std::sort(keyframes.begin(), keyframes.end(),
+            [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+  return keyframes;
+}
+
+std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored) {
+  if (!s.input) return SessionKeyFrames(s);
+  std::vector<FramePose> frames;
   for (const FramePose& f : ReadFramesCsv(s.input->frames_csv)) {
     const auto anchors = s.anchors.find(f.map_id + s.first_map_id);
     const std::optional<FramePose> moved =
@@ -253,13 +247,11 @@ nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
     }
     {
       auto lock = slam.map().ReadLock();
-      for (const auto& [loaded_map, anchors] : s.anchors) {
-        for (const auto& [frame, anchor] : anchors) {
-          const KeyFrame* kf = anchor.keyframe;
-          if (kf->is_bad() || kf->map_id() != main_map) continue;
-          input.keyframes.push_back({frame + index_shift, static_cast<long long>(kf->id()),
-                                     kf->timestamp() + shift, kf->world_from_camera(), main_map, false});
-        }
+      for (FramePose kf : SessionKeyFrames(s)) {
+        if (kf.map_id != main_map) continue;
+        kf.frame_index += index_shift;
+        kf.timestamp += shift;
+        input.keyframes.push_back(kf);
       }
     }
     for (GpsFix fix : log.fixes) {
@@ -594,17 +586,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       fs::create_directories(options.output / folder);
       nlohmann::json j = {
           {"id", s.id}, {"name", info.name}, {"source", info.source}, {"run", s.run.string()}};
-      std::vector<FramePose> keyframes;
-      for (const auto& [loaded_map, anchors] : s.anchors) {
-        for (const auto& [frame, anchor] : anchors) {
-          if (anchor.keyframe->is_bad()) continue;
-          keyframes.push_back({frame, static_cast<long long>(anchor.keyframe->id()),
-                               anchor.keyframe->timestamp(), anchor.keyframe->world_from_camera(),
-                               anchor.keyframe->map_id(), false});
-        }
-      }
-      std::sort(keyframes.begin(), keyframes.end(),
-                [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
+      const std::vector<FramePose> keyframes = SessionKeyFrames(s);
       size_t unanchored = 0;
       s.frames = SessionFrames(s, &unanchored);
       std::map<std::uint32_t, size_t> frames_per_map;
