@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 
+#include "semslam/core/binary_io.h"
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
 #include "semslam/map/map_file.h"
@@ -86,6 +87,32 @@ TEST(MapValidation, ANanTimestampIsRefused) {
   EXPECT_THAT(error, HasSubstr((dir / "map.semslam").string()));
   EXPECT_THAT(error, HasSubstr("keyframe 0"));
   EXPECT_THAT(error, HasSubstr("timestamp"));
+}
+
+// A count is the file's word until its records are read: a point count of 2^64 - 2 in a map with no points
+// must end in the file's truncation error, not in an allocation of that many.
+TEST(MapValidation, APointCountBeyondTheFileIsRefused) {
+  testing::TempDir dir;
+  const auto file = dir / "map.semslam";
+  {
+    Map empty;
+    auto lock = empty.ReadLock();
+    WriteMapFile(file, empty);
+  }
+  std::string payload = ReadChecksummedFile(file, "SEMSLMAP").payload;
+  // An empty map ends with its keyframe, point and extra-section counts (u64 each), all zero.
+  ASSERT_GE(payload.size(), 24u);
+  ASSERT_EQ(payload.substr(payload.size() - 24), std::string(24, '\0'));
+  payload.replace(payload.size() - 16, 8, std::string("\xfe\xff\xff\xff\xff\xff\xff\xff", 8));
+  WriteChecksummedFile(file, "SEMSLMAP", kMapFileVersion, payload);
+  Map loaded;
+  auto lock = loaded.WriteLock();
+  try {
+    (void)ReadMapFile(file, loaded);
+    ADD_FAILURE() << "a map file claiming 2^64 - 2 points was loaded";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(file.string()));
+  }
 }
 
 TEST(MapValidation, TheTreeCannotBeGivenACycle) {

@@ -445,8 +445,7 @@ MapFileContents ReadIntoMap(const std::filesystem::path& path, Map& map, bool ap
     links.emplace_back(parent, std::move(loops));
   }
   const auto num_points = r.Get<std::uint64_t>();
-  std::vector<MapPoint*> points;
-  points.reserve(num_points);
+  std::vector<MapPoint*> points;  // not reserved: the count is the file's, checked only as points are read
   for (std::uint64_t i = 0; i < num_points; ++i)
     points.push_back(MapSerializer::ReadPoint(r, map, offsets, by_file_id));
   MapFileContents contents;
