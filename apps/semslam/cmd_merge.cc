@@ -20,6 +20,7 @@ struct MergeArgs {
   bool overwrite = false;
   std::string vocabulary;
   bool no_place_recognition = false;
+  bool no_drive_loops = false;
   bool no_global_ba = false;
   bool no_gps_fusion = false;
   int global_ba_window = 1000;
@@ -33,15 +34,18 @@ void Run(const MergeArgs& args) {
   options.overwrite = args.overwrite;
   options.vocabulary = args.vocabulary;
   options.place_recognition = !args.no_place_recognition;
+  options.loops_between_drives = !args.no_drive_loops;
   options.global_ba = !args.no_global_ba;
   options.gps_fusion = !args.no_gps_fusion;
   options.global_ba_window_keyframes = args.global_ba_window;
   options.show_progress = !args.quiet && !Quiet();
   options.provenance = Provenance();
   const SessionMergeSummary summary = MergeSessions(options);
-  std::printf("%zu sessions merged into %zu map%s (%zu by place recognition, %zu by GPS) in %.1f s\n",
-              summary.sessions, summary.maps, summary.maps == 1 ? "" : "s", summary.place_merges,
-              summary.gps_joins, summary.seconds);
+  std::printf(
+      "%zu sessions merged into %zu map%s (%zu by place recognition, %zu by GPS; %zu loops between "
+      "drives) in %.1f s\n",
+      summary.sessions, summary.maps, summary.maps == 1 ? "" : "s", summary.place_merges, summary.gps_joins,
+      summary.session_loops, summary.seconds);
 }
 
 }  // namespace
@@ -59,6 +63,8 @@ void AddMergeCommand(CLI::App& app) {
   cmd->add_option("--vocabulary", args->vocabulary, "Bag-of-words vocabulary")->check(CLI::ExistingFile);
   cmd->add_flag("--no-place-recognition", args->no_place_recognition,
                 "Join maps by their GPS placement only (no search for shared places)");
+  cmd->add_flag("--no-drive-loops", args->no_drive_loops,
+                "Tie drives of a merged map only where a merge joined them (no loops between drives)");
   cmd->add_flag("--no-global-ba", args->no_global_ba, "Skip the final bundle adjustment of the merged maps");
   cmd->add_flag("--no-gps-fusion", args->no_gps_fusion,
                 "Keep the merged map where the merges put it (do not fuse it with every drive's GPS log)");

@@ -65,6 +65,8 @@ TEST(SessionMerge, TwoDrivesThroughOneTownBecomeOneMapWithASessionEach) {
   // The drives share their streets: places recognized across the maps merged them, not their GPS.
   EXPECT_EQ(run["maps"]["place_merges"], 1);
   EXPECT_EQ(run["maps"]["merges_not_confirmed"], 0);
+  // The same streets beyond the place that merged the drives: loops between them (2 measured).
+  EXPECT_GE(run["maps"]["session_loops"], 1);
   EXPECT_TRUE(run["maps"]["gps_joins"].empty());
   ExpectEverySessionWhole(run, {first, second});
   // Against one alignment of both drives together, each is about where its own alignment puts it (measured:

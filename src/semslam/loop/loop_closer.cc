@@ -174,15 +174,17 @@ void LoopCloser::Run() {
   queue_cv_.notify_all();
 }
 
-bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps,
-                                 const MergeCheck& merge_check) {
+bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const PlaceExclusions& excluded,
+                                 const PlaceCheck& place_check) {
   Stopwatch watch;
   bool corrected = false;
-  if (DetectLoop(current, excluded_maps)) {
+  if (DetectLoop(current, excluded)) {
     const auto checked = [&] {
-      if (!merge_check || matched_keyframe_->map_id() == current->map_id()) return true;
+      if (!place_check || (matched_keyframe_->map_id() == current->map_id() &&
+                           matched_keyframe_->session() == current->session()))
+        return true;
       auto lock = map_.ReadLock();
-      return merge_check(*current, *matched_keyframe_,
+      return place_check(*current, *matched_keyframe_,
                          current_from_world_.Inverse() * Sim3d(current->camera_from_world()));
     };
     if (ComputeSim3(current) && checked()) {
@@ -198,7 +200,7 @@ bool LoopCloser::ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t
   return corrected;
 }
 
-bool LoopCloser::DetectLoop(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps) {
+bool LoopCloser::DetectLoop(KeyFrame* current, const PlaceExclusions& excluded) {
   ScopedTimer timer(timing_, "loop_detection");
   auto lock = map_.ReadLock();
   if (current->is_bad()) return false;
@@ -231,7 +233,8 @@ bool LoopCloser::DetectLoop(KeyFrame* current, const std::set<std::uint32_t>& ex
   candidate_options.excluded = {current->id()};
   for (KeyFrame* kf : covisibles) candidate_options.excluded.insert(kf->id());
   if (!options_.merge_maps) candidate_options.map_id = current->map_id();
-  candidate_options.excluded_maps = excluded_maps;
+  candidate_options.excluded_maps = excluded.maps;
+  candidate_options.excluded_sessions = excluded.sessions;
   const std::vector<KeyFrame*> candidates =
       FindPlaceCandidates(current->bow, database_, map_, candidate_options);
   if (candidates.empty()) {

@@ -132,15 +132,21 @@ class LoopCloser {
   void Join();
 
   void InsertKeyFrame(KeyFrame* keyframe);
-  // Whether a verified merge goes ahead: the current keyframe, the matched one (of another map) and the
-  // transform that would take the current keyframe's map into the matched one's frame.
-  using MergeCheck = std::function<bool(const KeyFrame& current, const KeyFrame& matched,
+  // Whether a verified place between two drives goes ahead: the current keyframe, the matched one (of another
+  // map, or of another session of the same map) and the transform that would take the current keyframe's map
+  // into the matched one's frame (for a loop: the current keyframe's correction).
+  using PlaceCheck = std::function<bool(const KeyFrame& current, const KeyFrame& matched,
                                         const Sim3d& matched_from_current_map)>;
+  // Keyframes a place is not looked for among.
+  struct PlaceExclusions {
+    std::set<std::uint32_t> maps;
+    std::set<std::uint32_t> sessions;
+  };
   // What the thread does with a keyframe, in the caller's thread, for a closer not started (merging saved
-  // maps): detection among keyframes of maps other than `excluded_maps`, then verification, `merge_check` for
-  // a merge, and correction. Returns whether a loop or merge was made.
-  bool ProcessKeyFrame(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps = {},
-                       const MergeCheck& merge_check = {});
+  // maps): detection among keyframes not `excluded`, then verification, `place_check` for a merge or a loop
+  // between sessions, and correction. Returns whether a loop or merge was made.
+  bool ProcessKeyFrame(KeyFrame* current, const PlaceExclusions& excluded = {},
+                       const PlaceCheck& place_check = {});
   // Forgets the consistency groups of earlier keyframes (before keyframes that do not follow them).
   void ForgetCandidates();
   // Blocks until the queue is empty and no global BA is running.
@@ -153,7 +159,7 @@ class LoopCloser {
 
  private:
   void Run();
-  bool DetectLoop(KeyFrame* current, const std::set<std::uint32_t>& excluded_maps);
+  bool DetectLoop(KeyFrame* current, const PlaceExclusions& excluded);
   bool ComputeSim3(KeyFrame* current);
   // How many of the current keyframe's best covisibles find loop_points_ where current_from_world_ puts them.
   int CountVerifiedNeighbours(const KeyFrame* current) const;

@@ -17,7 +17,7 @@ std::vector<KeyFrame*> FindPlaceCandidates(const BowVector& query, const KeyFram
     if (options.excluded.count(r.id)) continue;
     KeyFrame* kf = map.KeyFrameById(r.id);
     if (kf == nullptr || kf->is_bad() || (options.map_id && kf->map_id() != *options.map_id) ||
-        options.excluded_maps.count(kf->map_id()))
+        options.excluded_maps.count(kf->map_id()) || options.excluded_sessions.count(kf->session()))
       continue;
     found[kf] = {r.shared_words, r.score};
     max_common = std::max(max_common, r.shared_words);

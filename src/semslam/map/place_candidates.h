@@ -18,9 +18,10 @@ namespace semslam {
 
 struct PlaceCandidateOptions {
   double min_score = 0.0;
-  std::set<std::uint64_t> excluded;       // keyframe ids never returned (the query and its neighbours)
-  std::optional<std::uint32_t> map_id;    // only keyframes of this map (see map.h); none: of any map
-  std::set<std::uint32_t> excluded_maps;  // no keyframe of these maps
+  std::set<std::uint64_t> excluded;           // keyframe ids never returned (the query and its neighbours)
+  std::optional<std::uint32_t> map_id;        // only keyframes of this map (see map.h); none: of any map
+  std::set<std::uint32_t> excluded_maps;      // no keyframe of these maps
+  std::set<std::uint32_t> excluded_sessions;  // nor of these sessions
 };
 
 // Read lock on the map held by the caller.

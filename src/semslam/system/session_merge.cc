@@ -34,7 +34,7 @@
 #include "semslam/report/html_report.h"
 #include "semslam/sim/scene_file.h"
 #include "semslam/system/atlas_outputs.h"
-#include "semslam/system/merge_verifier.h"
+#include "semslam/system/merge_places.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/slam_system.h"
 
@@ -460,59 +460,15 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
                  georeference.local ? "; its per-keyframe corrections are left out" : "");
   }
 
-  // 3. Place recognition across maps.
+  // 3. Place recognition across maps, then between the drives of each merged map.
   std::string status = "ok";
-  size_t place_merges = 0;
-  int proposals_rejected = 0;
+  PlaceRecognitionSummary places;
   if (options.place_recognition) {
-    std::vector<std::uint32_t> map_ids;
-    size_t to_examine = 0;
-    {
-      auto lock = map.ReadLock();
-      map_ids = map.MapIds();
-      to_examine = map.NumKeyFrames();
-    }
-    ProgressReporter progress("merge", to_examine, options.show_progress);
-    MergeVerifier verifier(world_maps);
-    size_t examined = 0;
-    // Until a pass over every map merges nothing (a map merged late may hold the place another one needs).
-    for (bool merged = true; merged && map_ids.size() > 1 && status == "ok";) {
-      merged = false;
-      std::stable_partition(map_ids.begin(), map_ids.end(),
-                            [&](std::uint32_t id) { return !world_maps.count(id); });
-      for (const std::uint32_t map_id : map_ids) {
-        std::vector<KeyFrame*> keyframes;
-        std::set<std::uint32_t> excluded = {map_id};
-        {
-          auto lock = map.ReadLock();
-          keyframes = map.KeyFramesOfMap(map_id);
-          if (world_maps.count(map_id)) {
-            for (const std::uint32_t other : map.MapIds()) {
-              if (!world_maps.count(other)) excluded.insert(other);
-            }
-          }
-        }
-        slam.loop_closer().ForgetCandidates();
-        for (KeyFrame* kf : keyframes) {
-          if (InterruptRequested()) {
-            status = "interrupted";
-            break;
-          }
-          progress.Update(std::min(++examined, to_examine),
-                          fmt::format("map {}, {} merges", map_id, place_merges));
-          if (kf->is_bad() || !slam.loop_closer().ProcessKeyFrame(kf, excluded, std::ref(verifier))) continue;
-          ++place_merges;
-          merged = true;
-          if (world_maps.erase(map_id)) world_maps.insert(kf->map_id());
-          break;
-        }
-        if (merged || status != "ok") break;
-      }
-      auto lock = map.ReadLock();
-      map_ids = map.MapIds();
-    }
-    progress.Finish(fmt::format("{} maps merged by place recognition", place_merges));
-    proposals_rejected = verifier.rejected();
+    PlaceRecognitionOptions place_options;
+    place_options.loops_between_drives = options.loops_between_drives;
+    place_options.show_progress = options.show_progress;
+    places = RecognizePlacesAcrossDrives(slam, world_maps, place_options);
+    if (places.interrupted) status = "interrupted";
   }
 
   // 4. The final bundle adjustment of each map.
@@ -737,8 +693,9 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   for (const InputRun& r : runs) run_json["runs"].push_back(r.dir.string());
   run_json["maps"] = {{"count", num_maps},
                       {"main_map", main_map},
-                      {"place_merges", place_merges},
-                      {"merges_not_confirmed", proposals_rejected},
+                      {"place_merges", places.merges},
+                      {"session_loops", places.session_loops},
+                      {"merges_not_confirmed", places.not_confirmed},
                       {"merge_events", merge_events},
                       {"gps_joins", joins},
                       {"sessions", session_json}};
@@ -756,13 +713,15 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     spdlog::warn("no report: {}", e.what());
   }
   spdlog::info(
-      "merged {} sessions of {} runs: {} maps left, {} merged by place recognition, {} joined by GPS",
-      sessions.size(), runs.size(), num_maps, place_merges, gps_joins);
+      "merged {} sessions of {} runs: {} maps left, {} merged by place recognition, {} joined by GPS, {} "
+      "loops between drives",
+      sessions.size(), runs.size(), num_maps, places.merges, gps_joins, places.session_loops);
 
   SessionMergeSummary summary;
   summary.sessions = sessions.size();
   summary.maps = num_maps;
-  summary.place_merges = place_merges;
+  summary.place_merges = places.merges;
+  summary.session_loops = places.session_loops;
   summary.gps_joins = gps_joins;
   summary.seconds = watch.ElapsedSeconds();
   return summary;
