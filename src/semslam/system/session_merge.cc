@@ -34,6 +34,7 @@
 #include "semslam/report/html_report.h"
 #include "semslam/sim/scene_file.h"
 #include "semslam/system/atlas_outputs.h"
+#include "semslam/system/merge_evaluation.h"
 #include "semslam/system/merge_places.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/slam_system.h"
@@ -320,7 +321,8 @@ std::vector<Landmark> UnionOfCatalogues(const std::vector<fs::path>& paths) {
 // drive of a town in one frame), else in its sequence's own frame.
 struct SessionTruth {
   Trajectory world_from_camera;
-  std::optional<EnuFrame> enu;  // the frame of world_from_camera, when it is the town's ENU
+  std::optional<EnuFrame> enu;                  // the frame of world_from_camera, when it is the town's ENU
+  std::vector<SceneTruth::Landmark> landmarks;  // the town's, in that frame
 };
 
 std::optional<SessionTruth> TruthOf(const InputSession& session, bool stereo) {
@@ -330,12 +332,13 @@ std::optional<SessionTruth> TruthOf(const InputSession& session, bool stereo) {
     options.stereo = stereo;
     std::optional<Trajectory> truth = OpenSequence(session.sequence, options)->GroundTruth();
     if (!truth) return std::nullopt;
-    SessionTruth out{std::move(*truth), std::nullopt};
+    SessionTruth out{std::move(*truth), std::nullopt, {}};
     if (const auto scene = sim::FindSceneJson(session.sequence)) {
       const SceneTruth town = ReadSceneTruth(scene->parent_path());
       for (StampedPose& p : out.world_from_camera)
         p.world_from_camera = town.enu_from_world * p.world_from_camera;
       out.enu = EnuFrame(town.origin);
+      out.landmarks = town.landmarks;
     }
     return out;
   } catch (const std::exception& e) {
@@ -533,6 +536,9 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   Trajectory city_estimate, city_truth;
   std::vector<std::pair<size_t, Trajectory>> session_estimates;  // index into session_json
   std::vector<Trajectory> session_truths;
+  // The synthetic town's truth in its ENU frame, by drive (FramePose::segment), for the landmarks.
+  std::map<std::uint32_t, Trajectory> town_truths;
+  std::optional<SessionTruth> town;  // its frame and landmarks
   {
     auto lock = map.ReadLock();
     for (size_t k = 0; k < sessions.size(); ++k) {
@@ -594,6 +600,16 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
               city_truth.push_back({p.timestamp + shift, p.world_from_camera});
             session_estimates.emplace_back(session_json.size(), trajectory);
             session_truths.push_back(truth->world_from_camera);
+            if (truth->enu) {
+              town_truths[static_cast<std::uint32_t>(k)] = truth->world_from_camera;
+              if (!town) town = SessionTruth{{}, truth->enu, {}};
+              // Each drive's scene names the landmarks along its route.
+              for (const SceneTruth::Landmark& l : truth->landmarks) {
+                if (std::none_of(town->landmarks.begin(), town->landmarks.end(),
+                                 [&](const SceneTruth::Landmark& t) { return t.name == l.name; }))
+                  town->landmarks.push_back(l);
+              }
+            }
             if (georeference && truth->enu) {
               // Where the merged map puts the drive in the world, against where it was: no alignment.
               Trajectory in_town = trajectory;
@@ -666,6 +682,11 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     if (!catalogues.empty()) geo.landmarks = UnionOfCatalogues(catalogues);
   }
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, {});
+  nlohmann::json landmark_evaluation = nullptr;
+  if (georeference && town && !geo_outputs.landmarks.empty()) {
+    landmark_evaluation = EvaluateMergedLandmarks(geo_outputs.landmarks, geo.keyframes, town_truths,
+                                                  EnuFromEnu(*town->enu, *world), town->landmarks);
+  }
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
   slam.SaveMap(options.output / "map.semslam", map_sections);
@@ -704,6 +725,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   run_json["ate_alignment"] = AlignmentName(alignment);
   run_json["classes"] = ClassCountsJson(CountLabels(semantic_points));
   run_json["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
+  run_json["landmark_evaluation"] = landmark_evaluation;
   run_json["provenance"] = ProvenanceJson(options.provenance);
   WriteFileAtomically(options.output / "run.json", run_json.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
