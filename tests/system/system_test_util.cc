@@ -184,6 +184,10 @@ Artifact StereoRun() {
   return Run("stereo_run", SyntheticDataset(), {"--mode", "stereo", "--pacing", "synchronous"});
 }
 
+Artifact SecondDriveStereoRun() {
+  return Run("stereo_run_traffic2", SecondDriveDataset(), {"--mode", "stereo", "--pacing", "synchronous"});
+}
+
 Artifact TinyStereoRun() {
   return Run("tiny_stereo_run", TinyDataset(), {"--mode", "stereo", "--pacing", "synchronous"});
 }

@@ -71,6 +71,8 @@ Artifact SecondDriveDataset();
 Artifact SecondDriveMonoRun();
 // `semslam run --sequence D --mode stereo --pacing synchronous` over the 200-frame city.
 Artifact StereoRun();
+// The second drive, stereo at synchronous pacing, no GPS.
+Artifact SecondDriveStereoRun();
 
 // `semslam run --mode stereo --pacing synchronous` over the 6-frame dataset (a small map.semslam).
 Artifact TinyStereoRun();

@@ -66,9 +66,10 @@ void MergeMapsByPlaces(SlamSystem& slam, MergeVerifier& verifier, std::set<std::
   }
 }
 
-// Loops between the drives of each map that holds more than one: each drive's keyframes, in order, against
-// the other drives' keyframes of its map (its own places were its run's to close).
-void CloseLoopsBetweenSessions(SlamSystem& slam, MergeVerifier& verifier, ProgressReporter& progress,
+// Loops between the drives of each map out of the world that holds more than one: each drive's keyframes, in
+// order, against the other drives' keyframes of its map (its own places were its run's to close).
+void CloseLoopsBetweenSessions(SlamSystem& slam, MergeVerifier& verifier,
+                               const std::set<std::uint32_t>& world_maps, ProgressReporter& progress,
                                size_t& examined, size_t to_examine, PlaceRecognitionSummary& summary) {
   Map& map = slam.map();
   std::vector<std::pair<std::uint32_t, std::uint32_t>> drives;  // (map, session), a map's drives together
@@ -81,7 +82,7 @@ void CloseLoopsBetweenSessions(SlamSystem& slam, MergeVerifier& verifier, Progre
     }
     for (const auto& [map_id, sessions] : sessions_of_map) {
       all_maps.insert(map_id);
-      if (sessions.size() < 2) continue;
+      if (sessions.size() < 2 || world_maps.count(map_id)) continue;
       for (const std::uint32_t session : sessions) drives.emplace_back(map_id, session);
     }
   }
@@ -128,7 +129,7 @@ PlaceRecognitionSummary RecognizePlacesAcrossDrives(SlamSystem& slam, std::set<s
   size_t examined = 0;
   MergeMapsByPlaces(slam, verifier, world_maps, progress, examined, to_examine, summary);
   if (options.loops_between_drives && !summary.interrupted)
-    CloseLoopsBetweenSessions(slam, verifier, progress, examined, to_examine, summary);
+    CloseLoopsBetweenSessions(slam, verifier, world_maps, progress, examined, to_examine, summary);
   progress.Finish(fmt::format("{} maps merged by place recognition, {} loops between drives", summary.merges,
                               summary.session_loops));
   summary.not_confirmed = verifier.rejected();

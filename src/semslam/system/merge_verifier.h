@@ -13,13 +13,13 @@
 namespace semslam {
 
 // A place seen on two drives passes loop closing's geometric checks; so does a look-alike (towns repeat their
-// facades), and between maps that share no odometry nothing else would tell. So: between two maps in the world
+// facades), and between maps that share no odometry nothing else would tell. So: between two maps in the
+// world
 // (`world_maps`, which the caller keeps current), the merge must agree with where their GPS placed them;
 // otherwise a second place, out of sight of the first (no covisibility), must give the same transform, found
-// in either direction (a place of a in b, or one of b in a). Counts the merges it refused or kept waiting. A
-// loop between two drives of one merged map (a place shared beyond the merge's seam) is held to the same: in
-// the world it moves its keyframe as little as a merge may, elsewhere a second place between the same two
-// drives confirms its correction.
+// in either direction (a place of a in b, or one of b in a). A loop between two drives of one merged map (a
+// place shared beyond the merge's seam) is held to the same: a second place between the same two drives must
+// confirm its correction. Counts what it refused or kept waiting.
 class MergeVerifier {
  public:
   explicit MergeVerifier(const std::set<std::uint32_t>& world_maps) : world_maps_(world_maps) {}
