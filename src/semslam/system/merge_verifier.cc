@@ -38,15 +38,16 @@ bool MergeVerifier::operator()(const KeyFrame& current, const KeyFrame& matched,
   };
   for (const Proposal& p : earlier) {
     // The earlier place as this one's direction sees it: its transform, and where it lies in the current
-    // keyframe's map.
+    // keyframe's map (a loop's two drives share one).
     const bool same_direction = p.from == from;
     const KeyFrame* place = same_direction ? p.keyframe : p.matched;
     if (p.keyframe->is_bad() || p.matched->is_bad() || in_sight(place)) continue;
     const Sim3d earlier_transform = same_direction ? p.transform : p.transform.Inverse();
     // Both transforms applied to both places: how far apart they put them, against the distance between
     // the places (the matched map's units).
-    const Eigen::Vector3d other = same_direction ? p.keyframe->world_from_camera().translation
-                                                 : p.transform * p.keyframe->world_from_camera().translation;
+    const Eigen::Vector3d other = same_direction || loop
+                                      ? p.keyframe->world_from_camera().translation
+                                      : p.transform * p.keyframe->world_from_camera().translation;
     const double span = (matched_from_current_map * centre - matched_from_current_map * other).norm();
     const double disagreement =
         std::max((matched_from_current_map * centre - earlier_transform * centre).norm(),
