@@ -68,6 +68,29 @@ double Median(std::vector<double> v) {
   return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// The landmark figures of e.landmark_errors.
+void SummarizeLandmarkErrors(GeoEvaluation& e) {
+  std::vector<double> errors, horizontal;
+  for (const GeoEvaluation::LandmarkError& l : e.landmark_errors) {
+    errors.push_back(l.error_m);
+    horizontal.push_back(l.horizontal_m);
+  }
+  e.landmarks = static_cast<int>(errors.size());
+  if (errors.empty()) return;
+  e.landmark_error_median_m = Median(errors);
+  e.landmark_error_max_m = *std::max_element(errors.begin(), errors.end());
+  e.landmark_error_horizontal_median_m = Median(horizontal);
+  e.landmark_error_horizontal_max_m = *std::max_element(horizontal.begin(), horizontal.end());
+}
+
+// The true pose at `timestamp` (within a millisecond) of a trajectory in time order, or null.
+const Rigid3d* TruePoseAt(const Trajectory& truth, double timestamp) {
+  const auto it = std::lower_bound(truth.begin(), truth.end(), timestamp - 1e-3,
+                                   [](const StampedPose& p, double t) { return p.timestamp < t; });
+  if (it == truth.end() || std::abs(it->timestamp - timestamp) > 1e-3) return nullptr;
+  return &it->world_from_camera;
+}
+
 }  // namespace
 
 void GeoEvaluationOptions::Check() const {
@@ -217,7 +240,6 @@ GeoEvaluation EvaluateGeo(const GeoOutputs& outputs, const GeoInputs& inputs, co
   }
   std::map<std::string, const SceneTruth::Landmark*> by_name;
   for (const SceneTruth::Landmark& l : truth.landmarks) by_name[l.name] = &l;
-  std::vector<double> errors, horizontal;
   for (const PlacedLandmark& placed : outputs.landmarks) {
     const auto it = by_name.find(placed.landmark.name);
     if (it == by_name.end() || placed.nearest_keyframe < 0) continue;
@@ -239,16 +261,33 @@ GeoEvaluation EvaluateGeo(const GeoOutputs& outputs, const GeoInputs& inputs, co
         truth.enu_from_world * (truth.world_from_camera[frame] * (metres_per_unit * in_camera));
     const Eigen::Vector3d d = true_place - it->second->enu;
     e.landmark_errors.push_back({placed.landmark.name, d.norm(), d.head<2>().norm()});
-    errors.push_back(d.norm());
-    horizontal.push_back(d.head<2>().norm());
   }
-  e.landmarks = static_cast<int>(errors.size());
-  if (!errors.empty()) {
-    e.landmark_error_median_m = Median(errors);
-    e.landmark_error_max_m = *std::max_element(errors.begin(), errors.end());
-    e.landmark_error_horizontal_median_m = Median(horizontal);
-    e.landmark_error_horizontal_max_m = *std::max_element(horizontal.begin(), horizontal.end());
+  SummarizeLandmarkErrors(e);
+  return e;
+}
+
+GeoEvaluation EvaluateLandmarksAcrossDrives(const std::vector<PlacedLandmark>& placed,
+                                            const std::vector<FramePose>& keyframes,
+                                            const std::map<std::uint32_t, Trajectory>& truths,
+                                            const Sim3d& town_from_map,
+                                            const std::vector<SceneTruth::Landmark>& truth_landmarks) {
+  std::map<std::string, const SceneTruth::Landmark*> by_name;
+  for (const SceneTruth::Landmark& l : truth_landmarks) by_name[l.name] = &l;
+  GeoEvaluation e;
+  for (const PlacedLandmark& p : placed) {
+    const auto truth_landmark = by_name.find(p.landmark.name);
+    if (truth_landmark == by_name.end() || p.nearest_keyframe < 0) continue;
+    const FramePose& kf = keyframes.at(static_cast<size_t>(p.nearest_keyframe));
+    const auto truth = truths.find(kf.segment);
+    if (truth == truths.end()) continue;
+    const Rigid3d* town_from_camera = TruePoseAt(truth->second, kf.timestamp);
+    if (town_from_camera == nullptr) continue;
+    // The merged map is metric in the world: the landmark in its keyframe's camera, in metres.
+    const Eigen::Vector3d in_camera = town_from_map.scale * (kf.world_from_camera.Inverse() * p.map_position);
+    const Eigen::Vector3d d = *town_from_camera * in_camera - truth_landmark->second->enu;
+    e.landmark_errors.push_back({p.landmark.name, d.norm(), d.head<2>().norm()});
   }
+  SummarizeLandmarkErrors(e);
   return e;
 }
 

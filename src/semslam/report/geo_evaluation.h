@@ -10,12 +10,16 @@
 // Trajectory error. Each tracked frame's WGS84 position (as in trajectory_wgs84.csv) against the true camera
 // centre, in metres, without any alignment.
 
+#include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "semslam/geo/wgs84.h"
 #include "semslam/geometry/rigid3.h"
+#include "semslam/geometry/sim3.h"
+#include "semslam/geometry/trajectory.h"
 #include "semslam/report/geo_outputs.h"
 
 namespace semslam {
@@ -90,5 +94,16 @@ struct GeoEvaluationOptions {
 // true poses (SceneTruth::world_from_camera).
 GeoEvaluation EvaluateGeo(const GeoOutputs& outputs, const GeoInputs& inputs, const SceneTruth& truth,
                           const GeoEvaluationOptions& options = {});
+
+// The landmarks of a map merged from several drives of one town (`semslam merge`), measured as above through
+// their nearest keyframe's true pose, which may be any drive's: `keyframes` carry the drive in their
+// `segment`, `truths` each drive's true poses in the town's ENU frame (by segment, in time order), and
+// `town_from_map` takes the merged map (metric, in the world) into that frame. Fills the landmark fields;
+// landmarks whose keyframe has no true pose are left out.
+GeoEvaluation EvaluateLandmarksAcrossDrives(const std::vector<PlacedLandmark>& placed,
+                                            const std::vector<FramePose>& keyframes,
+                                            const std::map<std::uint32_t, Trajectory>& truths,
+                                            const Sim3d& town_from_map,
+                                            const std::vector<SceneTruth::Landmark>& truth_landmarks);
 
 }  // namespace semslam

@@ -34,7 +34,6 @@
 #include "semslam/report/html_report.h"
 #include "semslam/sim/scene_file.h"
 #include "semslam/system/atlas_outputs.h"
-#include "semslam/system/merge_evaluation.h"
 #include "semslam/system/merge_places.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/slam_system.h"
@@ -172,8 +171,6 @@ struct SessionRecord {
   std::vector<FramePose> frames;                    // moved, after the merge
 };
 
-// A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
-// of theirs left.
 // A session's good keyframes where the atlas holds them now, in frame order.
 std::vector<FramePose> SessionKeyFrames(const SessionRecord& s) {
   std::vector<FramePose> keyframes;
@@ -189,6 +186,8 @@ std::vector<FramePose> SessionKeyFrames(const SessionRecord& s) {
   return keyframes;
 }
 
+// A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
+// of theirs left.
 std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored) {
   if (!s.input) return SessionKeyFrames(s);
   std::vector<FramePose> frames;
@@ -538,7 +537,8 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   std::vector<Trajectory> session_truths;
   // The synthetic town's truth in its ENU frame, by drive (FramePose::segment), for the landmarks.
   std::map<std::uint32_t, Trajectory> town_truths;
-  std::optional<SessionTruth> town;  // its frame and landmarks
+  std::optional<EnuFrame> town_enu;
+  std::map<std::string, SceneTruth::Landmark> town_landmarks;  // by name: each drive's scene names its own
   {
     auto lock = map.ReadLock();
     for (size_t k = 0; k < sessions.size(); ++k) {
@@ -602,13 +602,8 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
             session_truths.push_back(truth->world_from_camera);
             if (truth->enu) {
               town_truths[static_cast<std::uint32_t>(k)] = truth->world_from_camera;
-              if (!town) town = SessionTruth{{}, truth->enu, {}};
-              // Each drive's scene names the landmarks along its route.
-              for (const SceneTruth::Landmark& l : truth->landmarks) {
-                if (std::none_of(town->landmarks.begin(), town->landmarks.end(),
-                                 [&](const SceneTruth::Landmark& t) { return t.name == l.name; }))
-                  town->landmarks.push_back(l);
-              }
+              town_enu = truth->enu;
+              for (const SceneTruth::Landmark& l : truth->landmarks) town_landmarks.emplace(l.name, l);
             }
             if (georeference && truth->enu) {
               // Where the merged map puts the drive in the world, against where it was: no alignment.
@@ -683,9 +678,20 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   }
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, {});
   nlohmann::json landmark_evaluation = nullptr;
-  if (georeference && town && !geo_outputs.landmarks.empty()) {
-    landmark_evaluation = EvaluateMergedLandmarks(geo_outputs.landmarks, geo.keyframes, town_truths,
-                                                  EnuFromEnu(*town->enu, *world), town->landmarks);
+  if (georeference && town_enu && !geo_outputs.landmarks.empty()) {
+    std::vector<SceneTruth::Landmark> truth_landmarks;
+    for (const auto& [name, landmark] : town_landmarks) truth_landmarks.push_back(landmark);
+    const nlohmann::json e =
+        nlohmann::json::parse(EvaluateLandmarksAcrossDrives(geo_outputs.landmarks, geo.keyframes, town_truths,
+                                                            EnuFromEnu(*town_enu, *world), truth_landmarks)
+                                  .ToJson());
+    if (e["landmarks"].get<int>() > 0) {
+      landmark_evaluation = nlohmann::json::object();
+      for (const char* key :
+           {"landmarks", "landmark_error_median_m", "landmark_error_max_m",
+            "landmark_error_horizontal_median_m", "landmark_error_horizontal_max_m", "landmark_errors"})
+        landmark_evaluation[key] = e[key];
+    }
   }
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
