@@ -162,7 +162,7 @@ void LoopCloser::Run() {
       queue_.pop_front();
       busy_ = true;
     }
-    ProcessKeyFrame(current);
+    ProcessKeyFrame(current, {}, place_check_);
     {
       std::lock_guard lock(queue_mutex_);
       busy_ = false;

@@ -16,6 +16,7 @@
 #include <mutex>
 #include <set>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "semslam/core/timing.h"
@@ -147,6 +148,8 @@ class LoopCloser {
   // between sessions, and correction. Returns whether a loop or merge was made.
   bool ProcessKeyFrame(KeyFrame* current, const PlaceExclusions& excluded = {},
                        const PlaceCheck& place_check = {});
+  // The place check of the thread's own keyframes (none: every verified place goes ahead). Before Start.
+  void SetPlaceCheck(PlaceCheck place_check) { place_check_ = std::move(place_check); }
   // Forgets the consistency groups of earlier keyframes (before keyframes that do not follow them).
   void ForgetCandidates();
   // Blocks until the queue is empty and no global BA is running.
@@ -207,6 +210,7 @@ class LoopCloser {
   std::vector<ConsistentGroup> consistent_groups_;
   std::vector<KeyFrame*> enough_consistent_candidates_;
   std::uint64_t last_loop_keyframe_id_ = 0;
+  PlaceCheck place_check_;
 
   // The loop found by ComputeSim3.
   KeyFrame* matched_keyframe_ = nullptr;

@@ -147,6 +147,13 @@ SlamSystem::SlamSystem(const SlamOptions& options, const PinholeCamera& camera,
   mapper_ = std::make_unique<LocalMapper>(options_.mapper, *map_, *vocabulary_, *database_, timing_);
   loop_closer_ =
       std::make_unique<LoopCloser>(options_.loop, *map_, *vocabulary_, *database_, *mapper_, timing_);
+  if (options_.mode == SensorMode::kStereo) {
+    merge_verifier_ = std::make_unique<MergeVerifier>(no_world_maps_);
+    loop_closer_->SetPlaceCheck(
+        [this](const KeyFrame& current, const KeyFrame& matched, const Sim3d& transform) {
+          return current.map_id() == matched.map_id() || (*merge_verifier_)(current, matched, transform);
+        });
+  }
   mapper_->AddKeyFrameListener([this](KeyFrame* kf) { loop_closer_->InsertKeyFrame(kf); });
   tracker_ = std::make_unique<Tracker>(options_.tracker, camera_, stereo_, *map_, *vocabulary_, *database_,
                                        options_.localization_only ? nullptr : mapper_.get(), timing_);

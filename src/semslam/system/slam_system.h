@@ -10,6 +10,7 @@
 #include <mutex>
 #include <opencv2/core/mat.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -25,6 +26,7 @@
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/mapping/map_optimization.h"
 #include "semslam/semantics/segmentation_worker.h"
+#include "semslam/system/merge_verifier.h"
 #include "semslam/system/pacing.h"
 #include "semslam/tracking/tracker.h"
 
@@ -219,6 +221,12 @@ class SlamSystem {
   std::unique_ptr<Map> map_;
   std::unique_ptr<LocalMapper> mapper_;
   std::unique_ptr<LoopCloser> loop_closer_;
+  // Stereo: merges of the run's maps wait for a second place out of sight of the first (no map is in the
+  // world during a run). A stereo merge is an SE(3) with nothing like a monocular one's scale to disagree
+  // with the structure, and a look-alike block (towns repeat their facades) passes the loop closer's checks
+  // at one place, not at two.
+  std::set<std::uint32_t> no_world_maps_;
+  std::unique_ptr<MergeVerifier> merge_verifier_;
   std::unique_ptr<Tracker> tracker_;
   size_t frames_ = 0;
   size_t tracked_ = 0;
