@@ -97,7 +97,6 @@ class Map {
   std::uint64_t next_keyframe_id() const { return next_keyframe_id_; }
   std::uint64_t next_point_id() const { return next_point_id_; }
 
-
   // Incremented on changes that move many poses at once (loop closure, global BA, map merge), so that
   // tracking knows its motion model is stale.
   int big_change_index() const { return big_change_index_; }

@@ -1,5 +1,6 @@
 #pragma once
-// Which merges place recognition may make between saved maps (system/session_merge.h).
+// Which merges place recognition may make between saved maps (system/session_merge.h), and between the maps
+// of a stereo run (system/slam_system.h).
 #include <cstdint>
 #include <map>
 #include <set>
