@@ -186,9 +186,9 @@ TEST(BlackOutOnALookAlikeStreet, NoFrameIsPutABlockBackInTheLostMap) {
 Artifact StereoLookAlikeRun() {
   const Artifact town = SyntheticTown("town31_400", 400, 31);
   if (!town.ok()) return town;
-  const std::vector<std::string> compose = {
-      "compose", "--sequence", SequenceDir(town.dir).string(), "--frames", "0-399", "--black", "200:220",
-      "--stereo", "-q"};
+  const std::vector<std::string> compose = {"compose",  "--sequence", SequenceDir(town.dir).string(),
+                                            "--frames", "0-399",      "--black",
+                                            "200:220",  "--stereo",   "-q"};
   const std::vector<std::string> run = {"run",         "--mode",      "stereo", "--pacing",
                                         "synchronous", "--segmenter", "none",   "-q"};
   std::vector<std::string> recipe = compose;

@@ -16,16 +16,17 @@ constexpr int kFrames = 1200;
 TEST(Demo, TheDemosDriveKeepsItsReproducibleAccuracy) {
   SEMSLAM_REQUIRE_BINARY();
   testing::TempDir dir;
-  const CommandResult r = RunSemslam({"demo", "--out", (dir / "demo").string(), "--frames", std::to_string(kFrames),
-                                      "--second-drive", "100", "--pacing", "synchronous", "-q"});
+  const CommandResult r =
+      RunSemslam({"demo", "--out", (dir / "demo").string(), "--frames", std::to_string(kFrames),
+                  "--second-drive", "100", "--pacing", "synchronous", "-q"});
   ASSERT_TRUE(r.Succeeded()) << r.Describe();
   const nlohmann::json demo = ReadJson(dir / "demo" / "demo.json");
   const nlohmann::json run = ReadJson(dir / "demo" / "run" / "run.json");
   ASSERT_TRUE(demo.is_object() && run.is_object());
   EXPECT_EQ(run.value("with_pose", 0), kFrames);
   EXPECT_GE(run.value("loops", 0), 1) << "the demo's drive holds a loop";
-  // Measured at synchronous pacing (commit of this test): ATE 0.6923 m over 1087 m, the loop closed, map labels
-  // 90.34 % right (run.json label_accuracy). About 5 minutes on 2 cores.
+  // Measured at synchronous pacing (commit of this test): ATE 0.6923 m over 1087 m, the loop closed, map
+  // labels 90.34 % right (run.json label_accuracy). About 5 minutes on 2 cores.
   EXPECT_LE(demo.value("ate_rmse", 1e9), 1.05 * 0.6923);
   EXPECT_GE(demo.value("label_accuracy", 0.0), 0.9034 - 0.01);
   // The second drive is localized at fast pacing (not reproducible): the SPEC's bar.
