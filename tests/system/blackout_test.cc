@@ -104,6 +104,24 @@ std::string ModeName(const ::testing::TestParamInfo<std::string>& mode) { return
 
 INSTANTIATE_TEST_SUITE_P(Modes, BlackOut, ::testing::Values("mono", "stereo"), ModeName);
 
+// `compose` (a sequence with black frames) into DIR/sequence, then `run` on it into DIR/out, made once as the
+// artifact `name`.
+Artifact ComposedRun(const std::string& name, const std::vector<std::string>& compose,
+                     const std::vector<std::string>& run) {
+  std::vector<std::string> recipe = compose;
+  recipe.insert(recipe.end(), run.begin(), run.end());
+  return SharedArtifact(name, recipe, [&](const fs::path& dir) -> std::string {
+    std::vector<std::string> c = compose;
+    c.insert(c.end(), {"--out", (dir / "sequence").string()});
+    CommandResult r = RunSemslam(c);
+    if (!r.Succeeded()) return r.Describe();
+    std::vector<std::string> full = run;
+    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
+    r = RunSemslam(full);
+    return r.Succeeded() ? "" : r.Describe();
+  });
+}
+
 // Seed 2027's town, black frames 750-769 on a street of repeating fronts. The car drives 19 m in the
 // black-out, and the street a block back looks like the one ahead: found there by bag of words in the lost
 // map, the first frame after the black-out was put about where the camera had been before it, and the drive
@@ -126,18 +144,7 @@ Artifact LookAlikeRun() {
   const std::vector<std::string> run = {
       "run",      "--mode",      "mono",        "--frames", std::to_string(kLookAlikeFirstFrame) + ":",
       "--pacing", "synchronous", "--segmenter", "none",     "-q"};
-  std::vector<std::string> recipe = compose;
-  recipe.insert(recipe.end(), run.begin(), run.end());
-  return SharedArtifact("town2027_800_black750", recipe, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> c = compose;
-    c.insert(c.end(), {"--out", (dir / "sequence").string()});
-    CommandResult r = RunSemslam(c);
-    if (!r.Succeeded()) return r.Describe();
-    std::vector<std::string> full = run;
-    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
-    r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
+  return ComposedRun("town2027_800_black750", compose, run);
 }
 
 // frames.csv's tracked poses, by map.
@@ -191,18 +198,7 @@ Artifact StereoLookAlikeRun() {
                                             "200:220",  "--stereo",   "-q"};
   const std::vector<std::string> run = {"run",         "--mode",      "stereo", "--pacing",
                                         "synchronous", "--segmenter", "none",   "-q"};
-  std::vector<std::string> recipe = compose;
-  recipe.insert(recipe.end(), run.begin(), run.end());
-  return SharedArtifact("town31_400_black200_stereo", recipe, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> c = compose;
-    c.insert(c.end(), {"--out", (dir / "sequence").string()});
-    CommandResult r = RunSemslam(c);
-    if (!r.Succeeded()) return r.Describe();
-    std::vector<std::string> full = run;
-    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
-    r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
+  return ComposedRun("town31_400_black200_stereo", compose, run);
 }
 
 TEST(BlackOutInALookAlikeTown, AStereoMapIsNotMergedAtOnePlaceThatOnlyLooksTheSame) {
