@@ -3,11 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <array>
 #include <stdexcept>
 
 #include "semslam/core/atomic_file.h"
@@ -136,11 +136,11 @@ cv::Mat RenderGpsPlot(const GpsPlotInput& input, const PlotOptions& options) {
   std::vector<LegendEntry> legend;
   // The fused trajectory, thick, under the single similarity's, dashed: where they agree both stay visible.
   DrawPolyline(image, view, input.trajectory_enu, PlotColors::Trajectory(), 4);
-  legend.push_back({LegendEntry::Symbol::kLine, PlotColors::Trajectory(),
-                    input.single_sim3_enu.empty() ? "SLAM trajectory (transformed)" : "SLAM, GPS fusion"});
+  legend.emplace_back(LegendEntry::Symbol::kLine, PlotColors::Trajectory(),
+                      input.single_sim3_enu.empty() ? "SLAM trajectory (transformed)" : "SLAM, GPS fusion");
   if (!input.single_sim3_enu.empty()) {
     DrawDashedPolyline(image, Pixels(view, input.single_sim3_enu), PlotColors::SingleSim3(), 2);
-    legend.push_back({LegendEntry::Symbol::kDashedLine, PlotColors::SingleSim3(), "SLAM, one Sim(3)"});
+    legend.emplace_back(LegendEntry::Symbol::kDashedLine, PlotColors::SingleSim3(), "SLAM, one Sim(3)");
   }
   bool any_outlier = false;
   for (size_t i = 0; i < input.gps_enu.size(); ++i) {
@@ -154,9 +154,9 @@ cv::Mat RenderGpsPlot(const GpsPlotInput& input, const PlotOptions& options) {
       any_outlier = true;
     }
   }
-  legend.push_back({LegendEntry::Symbol::kDot, PlotColors::GpsInlier(), "GPS fixes used"});
+  legend.emplace_back(LegendEntry::Symbol::kDot, PlotColors::GpsInlier(), "GPS fixes used");
   if (any_outlier)
-    legend.push_back({LegendEntry::Symbol::kCross, PlotColors::GpsOutlier(), "GPS outliers (rejected)"});
+    legend.emplace_back(LegendEntry::Symbol::kCross, PlotColors::GpsOutlier(), "GPS outliers (rejected)");
   DrawFrameMarks(image, view, options);
   DrawTitle(image, options.title);
   return WithLegend(image, legend);
@@ -176,9 +176,9 @@ cv::Mat RenderTopologyPlot(const TopologicalMap& map, const PlotOptions& options
   DrawPolyline(image, view, trajectory, trajectory_color, 2);
   for (const TopoEdge& e : map.edges) DrawPolyline(image, view, e.polyline_enu, PlotColors::Edge(), 3);
   LabelPlacer labels(image.size());
-  labels.Reserve(cv::Rect(0, 0, image.cols, 44));              // title
+  labels.Reserve(cv::Rect(0, 0, image.cols, 44));                // title
   labels.Reserve(cv::Rect(0, image.rows - 40, image.cols, 40));  // scale bar
-  labels.Reserve(cv::Rect(0, 0, 60, 80));                      // north arrow
+  labels.Reserve(cv::Rect(0, 0, 60, 80));                        // north arrow
   for (const TopoLandmark& l : map.landmarks) {
     if (l.node < 0) continue;
     const cv::Point at = view.ToPixel(l.enu.head<2>());
@@ -204,10 +204,13 @@ cv::Mat RenderTopologyPlot(const TopologicalMap& map, const PlotOptions& options
   DrawFrameMarks(image, view, options);
   DrawTitle(image, options.title);
   std::vector<LegendEntry> legend;
-  if (map.NumLandmarkNodes() > 0) legend.push_back({LegendEntry::Symbol::kDot, PlotColors::LandmarkNode(), "landmark node"});
-  if (map.NumTurnNodes() > 0) legend.push_back({LegendEntry::Symbol::kSquare, PlotColors::TurnNode(), "turn node"});
-  if (!map.edges.empty()) legend.push_back({LegendEntry::Symbol::kLine, PlotColors::Edge(), "reachable (driven)"});
-  legend.push_back({LegendEntry::Symbol::kLine, trajectory_color, "trajectory"});
+  if (map.NumLandmarkNodes() > 0)
+    legend.emplace_back(LegendEntry::Symbol::kDot, PlotColors::LandmarkNode(), "landmark node");
+  if (map.NumTurnNodes() > 0)
+    legend.emplace_back(LegendEntry::Symbol::kSquare, PlotColors::TurnNode(), "turn node");
+  if (!map.edges.empty())
+    legend.emplace_back(LegendEntry::Symbol::kLine, PlotColors::Edge(), "reachable (driven)");
+  legend.emplace_back(LegendEntry::Symbol::kLine, trajectory_color, "trajectory");
   return WithLegend(image, legend);
 }
 
@@ -235,7 +238,8 @@ cv::Mat RenderSemanticMapPlot(const Points3d& points_enu, const std::vector<int>
     if (labelled && labels[i] == sky) continue;  // sky points have no place on a map
     const bool listed = labelled && display.listed[static_cast<size_t>(labels[i])];
     if (labelled && !listed) any_other = true;
-    const cv::Scalar color = listed ? ToBgr(display.color[static_cast<size_t>(labels[i])]) : ToBgr(display.other);
+    const cv::Scalar color =
+        listed ? ToBgr(display.color[static_cast<size_t>(labels[i])]) : ToBgr(display.other);
     cv::circle(image, view.ToPixel(points_enu[i].head<2>()), radius, color, cv::FILLED);
   }
   DrawPolyline(image, view, trajectory_enu, kBlack, 1);
@@ -244,15 +248,17 @@ cv::Mat RenderSemanticMapPlot(const Points3d& points_enu, const std::vector<int>
   for (int c = 0; c < kNumClasses; ++c) {
     if (display.listed[static_cast<size_t>(c)]) order.push_back(c);
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return counts[static_cast<size_t>(a)] > counts[static_cast<size_t>(b)]; });
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return counts[static_cast<size_t>(a)] > counts[static_cast<size_t>(b)];
+  });
   std::vector<LegendEntry> legend;
   for (const int c : order) {
-    legend.push_back({LegendEntry::Symbol::kSquare, ToBgr(display.color[static_cast<size_t>(c)]),
-                      std::string(ClassName(c))});
+    legend.emplace_back(LegendEntry::Symbol::kSquare, ToBgr(display.color[static_cast<size_t>(c)]),
+                        std::string(ClassName(c)));
   }
-  if (any_other) legend.push_back({LegendEntry::Symbol::kSquare, ToBgr(display.other), "other classes, unlabeled"});
-  legend.push_back({LegendEntry::Symbol::kLine, kBlack, "trajectory"});
+  if (any_other)
+    legend.emplace_back(LegendEntry::Symbol::kSquare, ToBgr(display.other), "other classes, unlabeled");
+  legend.emplace_back(LegendEntry::Symbol::kLine, kBlack, "trajectory");
   DrawFrameMarks(image, view, options);
   DrawTitle(image, options.title);
   return WithLegend(image, legend);
@@ -304,7 +310,8 @@ cv::Mat RenderMembershipPlot(const MembershipRaster& raster, const std::vector<P
     cv::circle(image, p, 5, kBlack, 1, cv::LINE_AA);
     names.ReserveAround(p, 6);
   }
-  for (const PlacedLandmark& l : landmarks) names.Place(image, l.landmark.name, view.ToPixel(l.enu.head<2>()));
+  for (const PlacedLandmark& l : landmarks)
+    names.Place(image, l.landmark.name, view.ToPixel(l.enu.head<2>()));
   DrawColorBar(image, 0.0, 1.0, "membership");
   DrawFrameMarks(image, view, options);
   DrawTitle(image, options.title);
