@@ -100,13 +100,23 @@ class Interrupted(Exception):
     pass
 
 
+def tool_python():
+    """The interpreter for tools/*.py, which need NumPy: this one if it has it, else Debian's python3 (where
+    scripts/install-deps.sh installs python3-numpy; a python3 first on PATH, e.g. pyenv's, may lack it)."""
+    for candidate in (sys.executable, "/usr/bin/python3"):
+        if candidate and subprocess.run([candidate, "-c", "import numpy"], capture_output=True).returncode == 0:
+            return candidate
+    raise SystemExit("benchmark: no python3 with NumPy to run tools/*.py (scripts/install-deps.sh installs "
+                     "python3-numpy for /usr/bin/python3)")
+
+
 class Context:
     """What a case needs from the benchmark: the binary, data folders, the cache, running a command."""
 
     def __init__(self, args):
         self.bin = os.path.abspath(args.bin)
         self.repo = REPO
-        self.python = sys.executable or "/usr/bin/python3"
+        self.python = tool_python()
         self.shared = os.path.abspath(args.shared)
         self.long_dir = args.long_drive
         self.long_kml = args.long_drive_gps
