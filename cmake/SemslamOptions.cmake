@@ -30,6 +30,14 @@ endif()
 # The modules that read user input (and the map loader) carry libFuzzer's coverage instrumentation; the rest
 # of the library stays as fast as in the sanitizer build without it.
 set(semslam_fuzzed_modules core io geo landmarks map semantics system)
+add_library(semslam_fuzz_coverage INTERFACE)
+target_compile_options(semslam_fuzz_coverage INTERFACE -fsanitize=fuzzer-no-link)
+# Under a sanitizer the tests' own code is compiled without optimization: it is a third of the build and,
+# instrumented at -O1, a test file took 54 s to compile against 24 s at -O0 (the library they test keeps -O1).
+add_library(semslam_test_code_options INTERFACE)
+if(SEMSLAM_SANITIZE OR SEMSLAM_THREAD_SANITIZER)
+  target_compile_options(semslam_test_code_options INTERFACE -O0)
+endif()
 
 # semslam_module(NAME SOURCES... DEPS...) declares one library per folder: semslam_<NAME>.
 function(semslam_module name)
@@ -40,7 +48,7 @@ function(semslam_module name)
   target_link_libraries(semslam_${name} PUBLIC ${ARG_DEPS} PRIVATE semslam_options)
   set_target_properties(semslam_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   if(SEMSLAM_FUZZ AND name IN_LIST semslam_fuzzed_modules)
-    target_compile_options(semslam_${name} PRIVATE -fsanitize=fuzzer-no-link)
+    target_link_libraries(semslam_${name} PRIVATE semslam_fuzz_coverage)
     semslam_precompiled_headers(semslam_${name} fuzzed_module)
   else()
     semslam_precompiled_headers(semslam_${name} module)

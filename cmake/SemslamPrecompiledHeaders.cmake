@@ -4,9 +4,9 @@
 # A precompiled header is only valid for a compilation with the same flags and predefined macros (GCC ignores an
 # invalid one, clang refuses it), so one is built per kind of target and reused by every target of that kind:
 #   module         the static libraries of src/semslam (position-independent);
-#   fuzzed_module  those of them that carry libFuzzer's coverage instrumentation (SEMSLAM_FUZZ);
+#   fuzzed_module  those of them that carry libFuzzer's coverage instrumentation (semslam_fuzz_coverage);
 #   program        the CLI, the benchmarks and the fuzz targets;
-#   test           the test executables (with GoogleTest; -O0 under a sanitizer, as semslam_test compiles them).
+#   test           the test executables (with GoogleTest and semslam_test_code_options).
 # Macros a target adds that none of these headers reads (its own SEMSLAM_* paths, Ceres' glog settings) leave
 # the header valid. CMake compiles with GCC's -Winvalid-pch, so a header that stopped matching is a warning (an
 # error with SEMSLAM_WERROR), not a silently slower build.
@@ -36,13 +36,10 @@ function(semslam_pch_owner kind out_var)
       set_target_properties(${owner} PROPERTIES POSITION_INDEPENDENT_CODE ON)
     endif()
     if(kind STREQUAL "fuzzed_module")
-      target_compile_options(${owner} PRIVATE -fsanitize=fuzzer-no-link)
+      target_link_libraries(${owner} PRIVATE semslam_fuzz_coverage)
     endif()
     if(kind STREQUAL "test")
-      target_link_libraries(${owner} PRIVATE GTest::gtest GTest::gmock)
-      if(SEMSLAM_SANITIZE OR SEMSLAM_THREAD_SANITIZER)
-        target_compile_options(${owner} PRIVATE -O0)
-      endif()
+      target_link_libraries(${owner} PRIVATE GTest::gtest GTest::gmock semslam_test_code_options)
       set(headers ${semslam_pch_test_headers})
     endif()
     target_precompile_headers(${owner} PRIVATE ${headers})
