@@ -5,6 +5,7 @@
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "semslam/geometry/eigen_types.h"
@@ -55,6 +56,10 @@ void DrawNorthArrow(cv::Mat& image);
 
 struct LegendEntry {
   enum class Symbol { kLine, kDashedLine, kDot, kCross, kSquare, kBand };
+  // A constructor rather than an aggregate: emplace_back needs one under clang 14 (no parenthesized aggregate
+  // initialization).
+  LegendEntry(Symbol symbol_in, cv::Scalar color_in, std::string text_in)
+      : symbol(symbol_in), color(color_in), text(std::move(text_in)) {}
   Symbol symbol;
   cv::Scalar color;
   std::string text;
