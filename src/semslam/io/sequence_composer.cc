@@ -151,8 +151,9 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
       time += dt * static_cast<double>(std::max<size_t>(1, jump));
     }
     times += fmt::format("{:.6f}\n", time);
-    if (truth)
-      truth_out.push_back((*truth)[frames.front().source_frame].Inverse() * (*truth)[f.source_frame]);
+    // The source's own frame, not one re-based on the first composed frame: drives composed from one source
+    // then share it, as a merged map measured with one alignment needs.
+    if (truth) truth_out.push_back((*truth)[f.source_frame]);
     progress.Update(i + 1, "");
   }
   progress.Finish(fmt::format("{} frames", frames.size()));

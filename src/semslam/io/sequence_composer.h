@@ -32,7 +32,7 @@ std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size
 
 // Writes the composed sequence into `out` (created; it must be empty or missing): images (left, and right
 // when `stereo` and the source has a second camera), times.txt (at the source's frame rate; a jump over k
-// source frames takes k intervals), gt.txt (KITTI poses, when the source has a
+// source frames takes k intervals), gt.txt (KITTI poses in the source's frame, when the source has a
 // ground truth), labels and depth (when the source has them; a black frame's labels are 255, "ignore", and its
 // depth 0) and camera.yaml. Throws InputError for frames the source does not have, or whose label or depth
 // image is missing.
