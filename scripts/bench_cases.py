@@ -587,6 +587,7 @@ def all_cases(quick, first_output=False, first_output_dry_run=False):
         cases += synthetic_cases([5153, 9241], 900, ["mono", "stereo"], {"mono": 120, "stereo": 170})
         cases.append(demo_case(1200, 300, 290, variants={"synchronous": 1, "quiet": None, "busy": 0}))
         cases += bench_city.city_cases(600, {"mono": 330, "stereo": 400})
+        cases += [bench_city.engine_case(600), bench_city.merge_memory_case(200)]
     if first_output or first_output_dry_run:
         cases.append(first_output_case(first_output_dry_run and not first_output))
     return cases

@@ -1,9 +1,19 @@
 """Benchmark cases of many drives merged into one map (`semslam merge`): each case runs its drives one after
-another at the case's pacing, merges their run folders, and reports the merged map against each drive's own run."""
+another at the case's pacing, merges their run folders, and reports the merged map against each drive's own run.
+The engine case maps a city on Dask workers (`python3 -m semslam.city`); the memory case merges 1, 2, 4 and 8
+drives."""
 
+import filecmp
 import os
+import re
+import resource
+import shutil
+import signal
+import subprocess
+import time
 
-from bench_cases import Case, bar, composed, drive0005, kitti07, read_json, run_slam, semslam, spec
+from bench_cases import (Case, RunFailed, Skip, bar, composed, drive0005, kitti07, read_json, run_slam, semslam,
+                         spec)
 
 CITY_SEED = 7331  # a town no test uses
 
@@ -133,3 +143,166 @@ def real_merge_cases():
         merge_case("merge_d05_colour_grey", "real", "drive 0005 colour (image_02) and grey (image_00) as two drives, "
                    "mono", d05, ["--mode", "mono"], figures(), 50),
     ]
+
+
+def city_drives(ctx, frames, route_seeds):
+    return [os.path.join(route(ctx, CITY_SEED, r, frames), "sequences", "00") for r in route_seeds]
+
+
+def children_cpu_s():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def python_package(ctx):
+    """build/<preset>/python beside the binary's build/<preset>/bin, with python3-distributed to run it."""
+    package = os.path.join(os.path.dirname(os.path.dirname(ctx.bin)), "python")
+    if not os.path.isfile(os.path.join(package, "semslam", "city.py")):
+        raise Skip("no Python package beside the binary (%s)" % package)
+    if subprocess.run([ctx.python, "-c", "import distributed"], capture_output=True).returncode != 0:
+        raise Skip("%s has no Dask distributed (python3-distributed)" % ctx.python)
+    return package
+
+
+class CityProcess:
+    """`python3 -m semslam.city` on a local cluster of `workers`; `kill_first_drive` SIGKILLs the worker of the
+    first drive that starts, once its semslam process has written for a while, so that the drive is run again."""
+
+    def __init__(self, ctx, package, drives, out, workers, args, kill_first_drive=False):
+        command = [ctx.python, "-m", "semslam.city", "--drives"] + drives + [
+            "--out", out, "--local-workers", str(workers), "--semslam", ctx.bin] + args
+        self.log = out + ".log"
+        env = dict(os.environ, PYTHONPATH=package)
+        with open(self.log, "w") as log:
+            log.write("$ %s\n" % " ".join(command))
+            log.flush()
+            start = time.monotonic()
+            if kill_first_drive:
+                self.code, self.killed = self._run_and_kill(ctx, command, env, log)
+            else:
+                self.code, self.killed = ctx.call(command, log, timeout=3600, env=env), None
+            self.seconds = time.monotonic() - start
+        self.command = command
+        with open(self.log, errors="replace") as f:
+            self.output = f.read()
+        if self.code != 0:
+            raise RunFailed("semslam.city exit %s (%s)" % (self.code, self.log))
+
+    @staticmethod
+    def _run_and_kill(ctx, command, env, log):
+        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+                                   cwd=ctx.repo, start_new_session=True)
+        killed = None
+        try:
+            for line in process.stdout:
+                log.write(line)
+                log.flush()
+                m = re.match(r"\s*drive (\S+): running on \S+ \(pid (\d+)\)", line)
+                if m and killed is None:
+                    time.sleep(10)  # well into the drive: its run folder is being written
+                    os.kill(int(m.group(2)), signal.SIGKILL)
+                    killed = m.group(1)
+                    log.write("benchmark: killed the worker of drive %s (pid %s)\n" % (killed, m.group(2)))
+            return process.wait(timeout=3600), killed
+        except BaseException:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+            raise
+
+
+def same_outputs(a, b, names):
+    """Whether two cities hold the same bytes where they say where the frames and points are: each drive's run
+    and the merged city (synchronous pacing is reproducible, so a drive run again must give the same)."""
+    parts = [os.path.join("drives", n, f) for n in names for f in ("trajectory.tum", "semantic_map.ply")]
+    parts.append(os.path.join("city", "semantic_map.ply"))
+    sessions = os.path.join(a, "city", "sessions")
+    parts += [os.path.join("city", "sessions", s, "trajectory.tum") for s in sorted(os.listdir(sessions))]
+    return all(os.path.exists(os.path.join(b, p)) and filecmp.cmp(os.path.join(a, p), os.path.join(b, p),
+                                                                  shallow=False) for p in parts)
+
+
+def engine_case(frames):
+    """Four drives on one Dask worker, then on two, then on two with the first drive's worker killed."""
+    def prepare(ctx):
+        return {"package": python_package(ctx), "drives": city_drives(ctx, frames, (1, 2, 3, 4))}
+
+    def run(ctx, prepared, run_dir, pacing):
+        shutil.rmtree(run_dir, ignore_errors=True)  # semslam.city would take an earlier city's drives as done
+        os.makedirs(run_dir)
+        drives, package = prepared["drives"], prepared["package"]
+        args = ["--mode", "mono", "--", "--segmenter", "truth-noisy:0.25"]
+        # One drive alone, to know how many cores one semslam run keeps busy (the bound on what a second worker
+        # can add on a machine of two cores).
+        alone = os.path.join(run_dir, "alone")
+        cpu0, t0 = children_cpu_s(), time.monotonic()
+        run_slam(ctx, case, drives[0], alone, "synchronous", ["--mode", "mono", "--segmenter", "truth-noisy:0.25"])
+        cores = (children_cpu_s() - cpu0) / (time.monotonic() - t0)
+        one = CityProcess(ctx, package, drives, os.path.join(run_dir, "workers1"), 1, args)
+        two = CityProcess(ctx, package, drives, os.path.join(run_dir, "workers2"), 2, args)
+        killed = CityProcess(ctx, package, drives, os.path.join(run_dir, "killed"), 2, args, kill_first_drive=True)
+        case.command = "python3 " + ctx.display(two.command, run_dir)[len("semslam "):]
+        names = sorted(os.listdir(os.path.join(run_dir, "workers2", "drives")))
+        redone = killed.killed is not None and len(re.findall(
+            r"drive %s: running on .*attempt 2" % re.escape(killed.killed), killed.output)) == 1
+        return {"wall_1_s": one.seconds, "wall_2_s": two.seconds, "wall_ratio": two.seconds / one.seconds,
+                "cores_one_run": cores, "killed_redone": 1 if redone else 0,
+                "killed_same": 1 if same_outputs(os.path.join(run_dir, "workers2"),
+                                                 os.path.join(run_dir, "killed"), names) else 0,
+                "same_1_2": 1 if same_outputs(os.path.join(run_dir, "workers1"),
+                                              os.path.join(run_dir, "workers2"), names) else 0}
+
+    figures = {
+        "wall_1_s": spec("4 drives and their merges on 1 worker", "s", "lower", "resource", digits=0),
+        "wall_2_s": spec("the same on 2 workers", "s", "lower", "resource", digits=0),
+        "wall_ratio": spec("2 workers / 1 worker", "x", "lower", "resource", digits=2,
+                           bars=[bar("<=", 0.65, "quiet", source="issue 43")]),
+        "cores_one_run": spec("cores one drive's run keeps busy (CPU time / wall time)", "", None, "resource",
+                              digits=2),
+        "killed_redone": spec("a killed worker's drive run again", "", "higher", digits=0,
+                              bars=[bar("==", 1, "quiet", source="issue 43")]),
+        "killed_same": spec("outputs with the kill = without (bytes)", "", "higher", digits=0,
+                            bars=[bar("==", 1, "quiet", source="issue 43")]),
+        "same_1_2": spec("outputs on 1 worker = on 2 (bytes)", "", "higher", digits=0,
+                         bars=[bar("==", 1, "quiet")]),
+    }
+    title = ("town seed %d, route seeds 1-4, %d frames each, mono, on a local Dask cluster "
+             "(`python3 -m semslam.city`)" % (CITY_SEED, frames))
+    case = Case("city_engine", "city", title, prepare, run, figures, 660,
+                variants={"synchronous": 0, "quiet": 1, "busy": 0})
+    return case
+
+
+def merge_memory_case(frames):
+    """`semslam merge` of the first 1, 2, 4 and 8 of eight short drives: its peak memory against their number."""
+    counts = (1, 2, 4, 8)
+
+    def prepare(ctx):
+        return {"drives": city_drives(ctx, frames, range(1, counts[-1] + 1))}
+
+    def run(ctx, prepared, run_dir, pacing):
+        drive_dirs = []
+        for k, sequence in enumerate(prepared["drives"]):
+            drive_dirs.append(os.path.join(run_dir, "drive%d" % (k + 1)))
+            run_slam(ctx, case, sequence, drive_dirs[-1], "synchronous", ["--mode", "mono"])
+        out = {}
+        for n in counts:
+            merged = os.path.join(run_dir, "merged%d" % n)
+            command = semslam(ctx, ["merge", "--maps"] + drive_dirs[:n] + ["--out", merged, "--overwrite", "-q"],
+                              merged + ".log", timeout=ctx.timeout(case))
+            run = read_json(os.path.join(merged, "run.json"))
+            out["merge_rss_%d_mib" % n] = run.get("peak_rss_mib")
+            out["merge_%d_s" % n] = run.get("seconds")
+        case.command = ctx.display(command, run_dir)
+        return out
+
+    figures = {}
+    for n in counts:
+        figures["merge_rss_%d_mib" % n] = spec("merge peak memory, %d drive%s" % (n, "" if n == 1 else "s"), "MiB",
+                                               "lower", "resource", digits=0)
+    for n in counts:
+        figures["merge_%d_s" % n] = spec("merge time, %d drive%s" % (n, "" if n == 1 else "s"), "s", "lower",
+                                         "resource", digits=1)
+    title = "town seed %d, route seeds 1-8, %d frames each, mono: `semslam merge` of 1, 2, 4, 8" % (CITY_SEED, frames)
+    case = Case("merge_memory", "city", title, prepare, run, figures, 240,
+                variants={"synchronous": 1, "quiet": 0, "busy": 0})
+    return case

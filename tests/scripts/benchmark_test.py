@@ -147,6 +147,16 @@ class Markdown(unittest.TestCase):
         self.assertIn("12 min 34 s", text)
         self.assertTrue(text.rstrip().endswith("- one limit"))
 
+    def test_every_group_has_a_section(self):
+        r = results({"ate_m": figure(quiet=[0.1])})
+        for name, group in (("city_a", "city"), ("odd_a", "a group without a title")):
+            r["cases"][name] = dict(r["cases"]["case_a"], group=group)
+        text = report.markdown(r)
+        self.assertIn("## Many drives, one city map\n", text)
+        self.assertIn("## a group without a title\n", text)
+        self.assertIn("| `city_a` |", text)
+        self.assertIn("| `odd_a` |", text)
+
     def test_skipped_case_says_why_and_comparison_is_listed(self):
         r = results({}, status="skipped")
         r["cases"]["case_a"]["reason"] = "no long-drive folder"
