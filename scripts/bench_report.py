@@ -302,7 +302,8 @@ def markdown(results, known_limits=""):
         if described:
             add("")
             for name, case in described:
-                add("- `%s`: %s. `%s`" % (name, case.get("title", ""), case.get("command", "")))
+                command = case.get("command")
+                add("- `%s`: %s.%s" % (name, case.get("title", ""), " `%s`" % command if command else ""))
             add("")
         if notes:
             lines.extend(notes)

@@ -427,6 +427,16 @@ def merge_results(loaded):
             merged["cases"][name] = case
         merged["seconds"] = merged.get("seconds", 0) + results.get("seconds", 0)
         merged["quick"] = merged.get("quick") or results.get("quick")
+        comparison = results.get("comparison")
+        if comparison:
+            mine = merged.get("comparison")
+            if not mine:
+                merged["comparison"] = dict(comparison)
+            elif mine.get("baseline_commit") != comparison.get("baseline_commit"):
+                raise SystemExit("benchmark: %s and %s were compared with different baselines (%s, %s)" % (
+                    first_path, path, mine.get("baseline_commit"), comparison.get("baseline_commit")))
+            else:
+                merged["comparison"] = dict(mine, findings=mine.get("findings", []) + comparison.get("findings", []))
     if len(loaded) > 1:
         merged["merged_from"] = len(loaded)
         merged["command"] = " ; ".join(r.get("command", "?") for _, r in loaded)
@@ -476,7 +486,8 @@ def parse_args(argv):
     p.add_argument("--known-limits", default=os.path.join(REPO, "docs", "known_limits.md"))
     p.add_argument("--markdown", metavar="RESULTS", nargs="+",
                    help="print docs/results.md made from RESULTS (several: runs of one binary, e.g. --quick and "
-                   "the long drive's cases, their cases together) and exit")
+                   "the long drive's cases, their cases and baseline comparisons together) and exit; with "
+                   "--write-docs and --update-baseline also write docs/results.md and the baseline from them")
     p.add_argument("--list", action="store_true", help="list the planned runs and exit")
     args = p.parse_args(argv)
     if args.runs is None:
@@ -495,7 +506,16 @@ def main(argv):
         for path in args.markdown:
             with open(path, encoding="utf-8") as f:
                 loaded.append((path, json.load(f)))
-        print(bench_report.markdown(merge_results(loaded), read_known_limits(args.known_limits)))
+        merged = merge_results(loaded)
+        markdown = bench_report.markdown(merged, read_known_limits(args.known_limits))
+        if args.write_docs:
+            write_atomically(os.path.join(REPO, "docs", "results.md"), markdown + "\n")
+            print("benchmark: docs/results.md written", file=sys.stderr)
+        if args.update_baseline:
+            baseline = {k: v for k, v in merged.items() if k != "comparison"}
+            write_atomically(args.baseline, json.dumps(baseline, indent=1) + "\n")
+            print("benchmark: baseline written to %s" % args.baseline, file=sys.stderr)
+        print(markdown)
         return 0
     cases = bench_cases.all_cases(args.quick, args.first_output, args.first_output_dry_run)
     if args.cases:

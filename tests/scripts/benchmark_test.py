@@ -198,6 +198,19 @@ class Merge(unittest.TestCase):
         self.assertIn("kitti00", merged["command"])
         self.assertIn("case B", report.markdown(merged))
 
+    def test_merged_results_keep_every_comparison(self):
+        def compared(case, text, commit="abc"):
+            r = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
+            r["cases"] = {case: r["cases"]["case_a"]}
+            r["comparison"] = {"baseline_commit": commit, "findings": [{"kind": "worse", "text": text}]}
+            return r
+        merged = benchmark.merge_results([("a.json", compared("case_a", "a worse")),
+                                          ("b.json", compared("case_b", "b worse"))])
+        self.assertEqual([f["text"] for f in merged["comparison"]["findings"]], ["a worse", "b worse"])
+        self.assertIn("2 figure(s) worse", report.markdown(merged))
+        with self.assertRaises(SystemExit):
+            benchmark.merge_results([("a.json", compared("case_a", "a")), ("c.json", compared("case_c", "c", "def"))])
+
     def test_two_binaries_or_one_case_twice_are_refused(self):
         a = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
         other = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (def)")
