@@ -3,7 +3,7 @@
 and with one core kept busy; results.json and a Markdown table, compared with bench/baseline.json.
 
   scripts/benchmark.sh [--quick] [--runs N] [--out DIR] [--cases REGEX] [--long-drive DIR] [--first-output]
-  scripts/benchmark.py --markdown RESULTS.json > docs/results.md
+  scripts/benchmark.py --markdown RESULTS.json... --write-docs [--update-baseline]
 
 The cases are in scripts/bench_cases.py, the figures' comparison and the Markdown in scripts/bench_report.py.
 Runs go one at a time. Rendered synthetic towns and composed sequences are cached (--cache, default
