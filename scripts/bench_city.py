@@ -10,6 +10,7 @@ import resource
 import shutil
 import signal
 import subprocess
+import threading
 import time
 
 from bench_cases import (Case, RunFailed, Skip, bar, composed, drive0005, kitti07, read_json, run_slam, semslam,
@@ -164,50 +165,60 @@ def python_package(ctx):
     return package
 
 
+class WorkerKiller(threading.Thread):
+    """Reads a `semslam.city` log as it grows; 10 s after the first drive starts (well into its run) SIGKILLs the
+    worker running it, so that Dask runs the drive again elsewhere."""
+
+    PATTERN = re.compile(r"^\s*drive (\S+): running on \S+ \(pid (\d+)\)", re.M)
+
+    def __init__(self, log_path):
+        super().__init__(daemon=True)
+        self.log_path = log_path
+        self.done = threading.Event()  # set when the city has ended
+        self.killed = None             # the drive whose worker was killed
+
+    def run(self):
+        while not self.done.wait(0.2):
+            with open(self.log_path, errors="replace") as f:
+                m = self.PATTERN.search(f.read())
+            if m is None:
+                continue
+            if not self.done.wait(10):
+                try:
+                    os.kill(int(m.group(2)), signal.SIGKILL)
+                    self.killed = m.group(1)
+                except ProcessLookupError:
+                    pass
+            return
+
+
 class CityProcess:
-    """`python3 -m semslam.city` on a local cluster of `workers`; `kill_first_drive` SIGKILLs the worker of the
-    first drive that starts, once its semslam process has written for a while, so that the drive is run again."""
+    """`python3 -m semslam.city` on a local cluster of `workers`, run and stopped as every benchmark command is
+    (ctx.call); `kill_first_drive` kills the worker of the first drive that starts (WorkerKiller)."""
 
     def __init__(self, ctx, package, drives, out, workers, args, kill_first_drive=False):
-        command = [ctx.python, "-m", "semslam.city", "--drives"] + drives + [
+        self.command = [ctx.python, "-m", "semslam.city", "--drives"] + drives + [
             "--out", out, "--local-workers", str(workers), "--semslam", ctx.bin] + args
-        self.log = out + ".log"
-        env = dict(os.environ, PYTHONPATH=package)
-        with open(self.log, "w") as log:
-            log.write("$ %s\n" % " ".join(command))
+        log_path = out + ".log"
+        killer = WorkerKiller(log_path) if kill_first_drive else None
+        with open(log_path, "w") as log:
+            log.write("$ %s\n" % " ".join(self.command))
             log.flush()
             start = time.monotonic()
-            if kill_first_drive:
-                self.code, self.killed = self._run_and_kill(ctx, command, env, log)
-            else:
-                self.code, self.killed = ctx.call(command, log, timeout=3600, env=env), None
+            if killer:
+                killer.start()
+            try:
+                code = ctx.call(self.command, log, timeout=3600, env=dict(os.environ, PYTHONPATH=package))
+            finally:
+                if killer:
+                    killer.done.set()
+                    killer.join()
             self.seconds = time.monotonic() - start
-        self.command = command
-        with open(self.log, errors="replace") as f:
+        self.killed = killer.killed if killer else None
+        with open(log_path, errors="replace") as f:
             self.output = f.read()
-        if self.code != 0:
-            raise RunFailed("semslam.city exit %s (%s)" % (self.code, self.log))
-
-    @staticmethod
-    def _run_and_kill(ctx, command, env, log):
-        process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
-                                   cwd=ctx.repo, start_new_session=True)
-        killed = None
-        try:
-            for line in process.stdout:
-                log.write(line)
-                log.flush()
-                m = re.match(r"\s*drive (\S+): running on \S+ \(pid (\d+)\)", line)
-                if m and killed is None:
-                    time.sleep(10)  # well into the drive: its run folder is being written
-                    os.kill(int(m.group(2)), signal.SIGKILL)
-                    killed = m.group(1)
-                    log.write("benchmark: killed the worker of drive %s (pid %s)\n" % (killed, m.group(2)))
-            return process.wait(timeout=3600), killed
-        except BaseException:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-            raise
+        if code != 0:
+            raise RunFailed("semslam.city exit %s (%s)" % (code, log_path))
 
 
 def same_outputs(a, b, names):
@@ -230,12 +241,13 @@ def engine_case(frames):
         shutil.rmtree(run_dir, ignore_errors=True)  # semslam.city would take an earlier city's drives as done
         os.makedirs(run_dir)
         drives, package = prepared["drives"], prepared["package"]
-        args = ["--mode", "mono", "--", "--segmenter", "truth-noisy:0.25"]
+        mode, run_args = ["--mode", "mono"], ["--segmenter", "truth-noisy:0.25"]
+        args = mode + ["--"] + run_args  # semslam.city passes what follows -- to every run
         # One drive alone, to know how many cores one semslam run keeps busy (the bound on what a second worker
         # can add on a machine of two cores).
         alone = os.path.join(run_dir, "alone")
         cpu0, t0 = children_cpu_s(), time.monotonic()
-        run_slam(ctx, case, drives[0], alone, "synchronous", ["--mode", "mono", "--segmenter", "truth-noisy:0.25"])
+        run_slam(ctx, case, drives[0], alone, "synchronous", mode + run_args)
         cores = (children_cpu_s() - cpu0) / (time.monotonic() - t0)
         one = CityProcess(ctx, package, drives, os.path.join(run_dir, "workers1"), 1, args)
         two = CityProcess(ctx, package, drives, os.path.join(run_dir, "workers2"), 2, args)

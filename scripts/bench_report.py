@@ -269,7 +269,7 @@ def markdown(results, known_limits=""):
         add("")
     cases = results.get("cases", {})
     # A group without a title of its own still gets a section: no case's figures are left out.
-    groups = list(GROUP_TITLES) + sorted({c.get("group") for c in cases.values()} - set(GROUP_TITLES))
+    groups = list(GROUP_TITLES) + sorted({c.get("group") for c in cases.values()} - set(GROUP_TITLES), key=str)
     for group in groups:
         members = [(n, c) for n, c in cases.items() if c.get("group") == group]
         if not members:

@@ -366,6 +366,18 @@ def run_benchmark(args, cases, command_text):
     return results
 
 
+def publish(args, results, markdown, stream=sys.stdout):
+    """--update-baseline: the results (without their comparison) as bench/baseline.json; --write-docs: the
+    Markdown as docs/results.md."""
+    if args.update_baseline:
+        baseline = {k: v for k, v in results.items() if k != "comparison"}
+        write_atomically(args.baseline, json.dumps(baseline, indent=1) + "\n")
+        print("benchmark: baseline written to %s" % args.baseline, file=stream)
+    if args.write_docs:
+        write_atomically(os.path.join(REPO, "docs", "results.md"), markdown + "\n")
+        print("benchmark: docs/results.md written", file=stream)
+
+
 def finish(args, results):
     baseline = None
     if args.update_baseline:
@@ -388,12 +400,7 @@ def finish(args, results):
         os.unlink(partial)
     markdown = bench_report.markdown(results, read_known_limits(args.known_limits))
     write_atomically(os.path.join(args.out, "results.md"), markdown + "\n")
-    if args.update_baseline:
-        write_atomically(args.baseline, text)
-        print("benchmark: baseline written to %s" % args.baseline)
-    if args.write_docs:
-        write_atomically(os.path.join(REPO, "docs", "results.md"), markdown + "\n")
-        print("benchmark: docs/results.md written")
+    publish(args, results, markdown)
     print()
     print(markdown)
     print()
@@ -508,13 +515,7 @@ def main(argv):
                 loaded.append((path, json.load(f)))
         merged = merge_results(loaded)
         markdown = bench_report.markdown(merged, read_known_limits(args.known_limits))
-        if args.write_docs:
-            write_atomically(os.path.join(REPO, "docs", "results.md"), markdown + "\n")
-            print("benchmark: docs/results.md written", file=sys.stderr)
-        if args.update_baseline:
-            baseline = {k: v for k, v in merged.items() if k != "comparison"}
-            write_atomically(args.baseline, json.dumps(baseline, indent=1) + "\n")
-            print("benchmark: baseline written to %s" % args.baseline, file=sys.stderr)
+        publish(args, merged, markdown, stream=sys.stderr)  # stdout is the Markdown
         print(markdown)
         return 0
     cases = bench_cases.all_cases(args.quick, args.first_output, args.first_output_dry_run)
