@@ -66,7 +66,6 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"init_match_level_difference", Bind(&o->tracker.init_match_level_difference)},
       {"init_min_parallax_deg", Bind(&o->tracker.init_min_parallax_deg)},
       {"init_parallax_rank", Bind(&o->tracker.init_parallax_rank)},
-      {"init_consecutive_frames", Bind(&o->tracker.init_consecutive_frames)},
       {"init_min_points", Bind(&o->tracker.init_min_points)},
       {"relocalization_timeout_s", Bind(&o->tracker.relocalization_timeout_s)},
       {"min_keyframes_to_keep_map", Bind(&o->tracker.min_keyframes_to_keep_map)},

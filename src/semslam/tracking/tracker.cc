@@ -39,7 +39,6 @@ void TrackerOptions::Check() const {
           "tracker: keyframe_collapse_ratio_mono/stereo must be in [0, keyframe_tracked_ratio]");
   Require(keyframe_weak_inliers_mono >= 0, "tracker: keyframe_weak_inliers_mono must be >= 0");
   Require(init_min_matches >= 8, "tracker: init_min_matches must be >= 8");
-  Require(init_consecutive_frames >= 1, "tracker: init_consecutive_frames must be >= 1");
   Require(init_min_parallax_deg >= 0 && init_parallax_rank >= 1 && init_min_points >= 8,
           "tracker: init_min_parallax_deg must be >= 0, init_parallax_rank >= 1, init_min_points >= 8");
   Require(init_match_max_level >= 0 && init_match_level_difference >= 0,

@@ -57,10 +57,6 @@ struct TrackerOptions {
   double init_min_parallax_deg = 2.0;
   int init_parallax_rank = 50;
   int init_min_points = 100;  // well-triangulated points needed
-  // The map starts once this many consecutive frames each pass the two-view test from the same first frame,
-  // from the last of them: over a short baseline the parallax estimate jumps from frame to frame, and a wrong
-  // motion (rotation mistaken for sideways travel) can pass once where the next frame fails. 1: the first pass.
-  int init_consecutive_frames = 2;
   // Lost for this long (seconds) without relocalizing in the active map: a new map may start and the old one
   // is kept, to be merged when its places are seen again. Monocular re-initializes; stereo starts at once.
   // Until the new map has started, every frame tries relocalization in the lost map first: after a short
@@ -268,7 +264,6 @@ class Tracker {
   std::vector<Eigen::Vector2f> init_prior_positions_;
   static constexpr size_t kMaxBetweenFrames = 40;
   std::deque<Frame> init_between_frames_;
-  int init_passes_ = 0;  // consecutive frames up to the last that passed the two-view test from init_frame_
 
   std::vector<FrameRecord> records_;
   std::vector<NewKeyFrame> new_keyframes_;  // of the frame being tracked

@@ -50,7 +50,6 @@ bool Tracker::InitializeMonocular(Frame& frame) {
       init_prior_positions_.clear();
       for (const auto& kp : frame.features().keypoints) init_prior_positions_.push_back(kp.pixel);
       init_between_frames_.clear();
-      init_passes_ = 0;
     }
     return false;
   }
@@ -91,13 +90,8 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   // The keypoints are undistorted already: the frame's own (pinhole) camera, not the lens's.
   const TwoViewResult two_view =
       InitializeTwoView(pixels1, pixels2, init_frame_->data().camera, two_view_options);
-  init_passes_ = two_view.success ? init_passes_ + 1 : 0;
-  if (init_passes_ < options_.init_consecutive_frames) {
-    if (!two_view.success)
-      spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
-    else
-      spdlog::debug("frame {}: two-view test passed ({} of {} frames in a row)", frame.id(), init_passes_,
-                    options_.init_consecutive_frames);
+  if (!two_view.success) {
+    spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
     // Kept to be posed in the map once it starts (a few dozen frames at most: older ones go).
     if (init_between_frames_.size() >= kMaxBetweenFrames) init_between_frames_.pop_front();
     init_between_frames_.push_back(frame);
