@@ -463,7 +463,8 @@ def read_known_limits(path):
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="fewer and shorter cases, no busy runs")
-    p.add_argument("--runs", type=int, help="realtime runs per case, quiet (default 3; --quick 2)")
+    p.add_argument("--runs", type=int, help="realtime runs per case, quiet (default 2; some cases "
+                   "fix their own: --list shows them)")
     p.add_argument("--busy-runs", type=int, help="realtime runs per case with a core kept busy (default 1, "
                    "compared with the baseline within the quiet runs' range; --quick 0)")
     p.add_argument("--out", default=os.path.join(REPO, "out", "benchmark"), help="output folder")
@@ -479,7 +480,7 @@ def parse_args(argv):
                    help="KITTI 00's OpenStreetMap extract, kitti_00.osm (default $SEMSLAM_LONG_DRIVE_OSM, else "
                    "found as the RTK track)")
     p.add_argument("--first-output", action="store_true",
-                   help="also time scripts/demo.sh in a fresh clone with an empty compiler cache (~20 min)")
+                   help="also time scripts/demo.sh in a fresh clone with an empty compiler cache (~12 min)")
     p.add_argument("--first-output-dry-run", action="store_true",
                    help="the first-output case with the warm compiler cache and a 100-frame demo (checks the steps)")
     p.add_argument("--bin", default=os.path.join(REPO, "build", "release", "bin", "semslam"))
@@ -498,7 +499,7 @@ def parse_args(argv):
     p.add_argument("--list", action="store_true", help="list the planned runs and exit")
     args = p.parse_args(argv)
     if args.runs is None:
-        args.runs = 2 if args.quick else 3
+        args.runs = 2
     if args.busy_runs is None:
         args.busy_runs = 0 if args.quick else 1
     if args.runs < 1 or args.busy_runs < 0:
