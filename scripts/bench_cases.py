@@ -375,7 +375,7 @@ def demo_case(frames, second_drive, variants):
     drive_frames = frames + second_drive
     case = Case("demo", "demo", "`semslam demo` (%s frames, second drive %s)" % (frames, second_drive), prepare,
                 run, figures, drive_frames / 17 + drive_frames / 10 + 10, variants,
-                sync_seconds=drive_frames / 17 + 0.08 * drive_frames)
+                sync_seconds=drive_frames / 17 + 0.1 * drive_frames)
     return case
 
 
@@ -384,9 +384,9 @@ def synthetic_cases(seeds, frames, blackout_modes, variants=None):
     black-out in the middle of the first seed's town (one run per mode in blackout_modes)."""
     cases = []
     # Measured here: a realtime run takes its frames at 10 Hz and a few seconds more; a synchronous one about
-    # 70 ms a frame (mono) or 120 ms (stereo).
+    # 100 ms a frame (mono) or 160 ms (stereo).
     est = {"mono": frames / 10 + 8, "stereo": frames / 10 + 8}
-    sync_est = {"mono": 0.07 * frames, "stereo": 0.12 * frames}
+    sync_est = {"mono": 0.1 * frames, "stereo": 0.16 * frames}
     geo_args = lambda p: ["--gps", os.path.join(p["town"], "oxts"), "--gps-every", "30", "--landmarks",
                           os.path.join(p["town"], "landmarks.csv"), "--segmenter", "truth-noisy:0.25"]
     for seed in seeds:
@@ -452,7 +452,7 @@ def real_cases(quick):
     }
     cases.append(slam_case("kitti07_mono", "real", "KITTI 07 frames 0-159, mono",
                            lambda ctx: {"sequence": kitti07(ctx)}, ["--mode", "mono", "--frames", "0:160"],
-                           k07_figures, 18, sync_seconds=6))
+                           k07_figures, 18, sync_seconds=9))
     d05 = lambda ctx: {"sequence": drive0005(ctx), "drive": drive0005(ctx)}
     cases.append(slam_case(
         "d05_image02_mono", "real", "drive 0005 colour camera (image_02), 154 frames, mono", d05,
@@ -460,19 +460,19 @@ def real_cases(quick):
         {"ate_m": with_bars(ATE, bar("<=", 0.30, "quiet", source="issue 41")),
          "with_pose": with_bars(WITH_POSE, bar(">=", 154, "quiet", source="issue 41")),
          "tracked": spec("frames tracked", "", "higher", digits=0),
-         "keyframes_per_100": KEYFRAMES, "tracking_ms": TRACKING}, 18, sync_seconds=7))
+         "keyframes_per_100": KEYFRAMES, "tracking_ms": TRACKING}, 18, sync_seconds=11))
     cases.append(slam_case(
         "d05_image00_mono", "real", "drive 0005 grey camera (image_00), frames 0-79, mono", d05,
         ["--camera", "image_00", "--mode", "mono", "--frames", "0:80"],
         {"ate_m": ATE, "with_pose": WITH_POSE, "tracked": spec("frames tracked", "", "higher", digits=0),
-         "keyframes_per_100": KEYFRAMES}, 9, sync_seconds=4))
+         "keyframes_per_100": KEYFRAMES}, 10, sync_seconds=5))
     cases.append(slam_case(
         "d05_stereo", "real", "drive 0005 grey stereo (image_00/01), frames 0-79", d05,
         ["--mode", "stereo", "--frames", "0:80"],
         {"ate_m": ATE, "with_pose": WITH_POSE,
          "path_error_pct": spec("path against the OXTS forward speed", "%", None, digits=2,
                                 bars=[bar("abs<=", 1.0, "quiet", source="issue 41")]),
-         "keyframes_per_100": KEYFRAMES}, 10, more=d05_stereo_path, sync_seconds=5))
+         "keyframes_per_100": KEYFRAMES}, 10, more=d05_stereo_path, sync_seconds=6))
     osm = lambda ctx: require(os.path.join(ctx.shared, "kitti_raw_2011_09_26_drive_0005_osm",
                                            "2011_09_26_drive_0005_sync.osm"), "drive 0005 OpenStreetMap extract")
 
@@ -501,7 +501,7 @@ def real_cases(quick):
                             bars=[bar("<=", 5.0, "quiet", source="issue 10")]),
          "sky_pct": spec("map points 'sky'", "%", "lower", digits=1,
                          bars=[bar("<=", 2.0, "quiet", source="issue 10")])},
-        17, more=d05_geo, sync_seconds=14))
+        19, more=d05_geo, sync_seconds=28))
     composed_figures = lambda with_pose_bars: {
         "with_pose_pct": spec("frames with a pose", "%", "higher", digits=1, bars=with_pose_bars),
         "ate_m": ATE, "maps_started": MAPS_STARTED, "merges": MERGES,
@@ -510,11 +510,11 @@ def real_cases(quick):
         "k07_pp", "real", "KITTI 07 composed forth, back, forth with a 20-frame cut, back (617 frames)",
         lambda ctx: {"sequence": composed(ctx, kitti07(ctx), "0-159,158-0,1-59,80-159,158-0")}, ["--mode", "mono"],
         composed_figures([bar(">=", 99.0, "quiet", source="issue 9"), bar(">=", 95.0, "busy", source="issue 9")]),
-        66, sync_seconds=18))
+        66, sync_seconds=31))
     cases.append(slam_case(
         "k07_cut3", "real", "KITTI 07 composed 0-59, 80-159 (a 2 s gap), back 158-0 (299 frames): a new map, merged",
         lambda ctx: {"sequence": composed(ctx, kitti07(ctx), "0-59,80-159,158-0")}, ["--mode", "mono"],
-        composed_figures([]), 33, sync_seconds=9))
+        composed_figures([]), 33, sync_seconds=15))
     return cases
 
 
@@ -529,7 +529,7 @@ def long_cases():
         "loops": LOOPS, "maps_started": MAPS_STARTED, "merges": MERGES,
     }
     mono = slam_case("kitti00_mono", "long", "KITTI 00 frames 0-1699, mono", long_drive,
-                     ["--mode", "mono", "--frames", LONG_DRIVE_FRAMES], figures, 192, sync_seconds=75,
+                     ["--mode", "mono", "--frames", LONG_DRIVE_FRAMES], figures, 192, sync_seconds=100,
                      variants={"synchronous": 1, "quiet": 3, "busy": 3})  # its bars judge every one of 3 runs
     gps_figures = {
         "frames_in_one_map": spec("frames with a pose in one map", "", "higher", digits=0),
@@ -557,7 +557,7 @@ def long_cases():
         long_drive,
         lambda p: ["--mode", "mono", "--frames", LONG_DRIVE_FRAMES, "--gps", p["rtk"], "--gps-every", "30",
                    "--landmarks", p["osm"], "--gps-lever-arm=" + KITTI00_LEVER_ARM],
-        gps_figures, 185, variants={"synchronous": 1, "quiet": None, "busy": 0}, more=kitti00_geo, sync_seconds=100)
+        gps_figures, 185, variants={"synchronous": 1, "quiet": None, "busy": 0}, more=kitti00_geo, sync_seconds=130)
     return [mono, gps]
 
 
@@ -599,7 +599,7 @@ def all_cases(quick, first_output=False, first_output_dry_run=False):
         cases.append(demo_case(400, 100, variants={"synchronous": 1, "quiet": 1, "busy": 0}))
     else:
         cases += long_cases()
-        cases += synthetic_cases([5153, 9241], 900, ["mono", "stereo"], variants={"busy": 0})
+        cases += synthetic_cases([5153, 9241], 600, ["mono", "stereo"], variants={"busy": 0})
         cases.append(demo_case(1200, 300, variants={"synchronous": 1, "quiet": 1, "busy": 0}))
         cases += bench_city.city_cases(600)
         cases += [bench_city.engine_case(600), bench_city.merge_memory_case(200)]

@@ -143,9 +143,9 @@ def real_merge_cases():
     d05 = lambda ctx: [(drive0005(ctx), ["--camera", "image_02"]), (drive0005(ctx), ["--camera", "image_00"])]
     return [
         merge_case("merge_k07_forth_back", "real", "KITTI 07 frames 0-159 and 159-0 as two drives, mono", k07,
-                   ["--mode", "mono"], figures(), 35, sync_seconds=11),
+                   ["--mode", "mono"], figures(), 35, sync_seconds=18),
         merge_case("merge_d05_colour_grey", "real", "drive 0005 colour (image_02) and grey (image_00) as two drives, "
-                   "mono", d05, ["--mode", "mono"], figures(), 26, sync_seconds=10),
+                   "mono", d05, ["--mode", "mono"], figures(), 26, sync_seconds=16),
     ]
 
 
