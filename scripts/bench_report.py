@@ -131,6 +131,13 @@ def compare(baseline, results):
         old = old_cases.get(case_name)
         if old is None or old.get("status") != "ok":
             continue
+        if old.get("title") and case.get("title") and old["title"] != case["title"]:
+            # The same name, other inputs (a --quick town against the full one's): nothing to compare.
+            findings.append({"case": case_name, "figure": None, "variant": None, "kind": "not compared",
+                             "baseline": None, "new": None,
+                             "text": "%s: not compared, the baseline ran %s; this run %s" % (
+                                 case_name, old["title"], case["title"])})
+            continue
         if case.get("status") == "failed":
             findings.append({"case": case_name, "figure": None, "variant": None, "kind": "failed",
                              "baseline": None, "new": None,
@@ -254,7 +261,8 @@ def markdown(results, known_limits=""):
     elif comparison is not None:
         findings = comparison.get("findings", [])
         worse = worse_findings(findings)
-        others = [f for f in findings if f not in worse]
+        apart = [f for f in findings if f["kind"] == "not compared"]
+        others = [f for f in findings if f not in worse and f not in apart]
         add("Against `%s` (commit `%s`): %s." % (
             comparison.get("baseline", "bench/baseline.json"), comparison["baseline_commit"],
             "no figure got worse by more than its measured run-to-run range" if not worse else
@@ -265,6 +273,11 @@ def markdown(results, known_limits=""):
             add("")
             add("Changed at synchronous pacing, not for the worse:")
             for f in others:
+                add("- %s" % f["text"])
+        if apart:
+            add("")
+            add("Not compared (other inputs under the same name):")
+            for f in apart:
                 add("- %s" % f["text"])
         add("")
     cases = results.get("cases", {})

@@ -130,6 +130,19 @@ class Compare(unittest.TestCase):
         self.assertEqual(report.compare(old, results({}, status="skipped")), [])
         self.assertEqual(report.compare(None, results({"ate_m": figure(quiet=[0.1])})), [])
 
+    def test_a_case_of_other_inputs_is_named_not_compared(self):
+        old = results({"ate_m": figure(sync=0.1, quiet=[0.1])})
+        new = results({"ate_m": figure(sync=0.9, quiet=[0.9])})
+        new["cases"]["case_a"]["title"] = "case A, longer"
+        findings = report.compare(old, new)
+        self.assertEqual([f["kind"] for f in findings], ["not compared"])
+        self.assertEqual(report.worse_findings(findings), [])
+        new["comparison"] = {"baseline_commit": "abc", "findings": findings}
+        text = report.markdown(new)
+        self.assertIn("no figure got worse", text)
+        self.assertIn("Not compared (other inputs under the same name):\n- case_a: not compared, the baseline ran "
+                      "case A; this run case A, longer", text)
+
 
 class Markdown(unittest.TestCase):
     def test_table_with_bars_and_verdicts(self):
