@@ -2,6 +2,8 @@
 """The benchmark's comparison with its baseline, its bars, its Markdown and its geographic figures (pure functions,
 no SLAM run)."""
 
+import contextlib
+import io
 import json
 import os
 import sys
@@ -223,6 +225,22 @@ class Merge(unittest.TestCase):
         self.assertIn("2 figure(s) worse", report.markdown(merged))
         with self.assertRaises(SystemExit):
             benchmark.merge_results([("a.json", compared("case_a", "a")), ("c.json", compared("case_c", "c", "def"))])
+
+    def test_the_page_is_compared_anew_with_the_baseline_given(self):
+        run = results({"ate_m": figure(sync=0.5, quiet=[0.5])}, binary_version="semslam 1 (abc)")
+        run["comparison"] = {"baseline_commit": "old", "findings": []}  # as the run compared itself
+        base = results({"ate_m": figure(sync=0.1, quiet=[0.1])}, commit={"short": "base"})
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = {name: os.path.join(tmp, name + ".json") for name in ("run", "base")}
+            for name, data in (("run", run), ("base", base)):
+                with open(paths[name], "w") as f:
+                    json.dump(data, f)
+            page, log = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(page), contextlib.redirect_stderr(log):
+                code = benchmark.main(["--markdown", paths["run"], "--baseline", paths["base"]])
+            text = page.getvalue()
+        self.assertEqual(code, 0)
+        self.assertIn("(commit `base`): 2 figure(s) worse", text)
 
     def test_two_binaries_or_one_case_twice_are_refused(self):
         a = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
