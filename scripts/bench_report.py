@@ -246,7 +246,8 @@ def markdown(results, known_limits=""):
         add("- Binary: `%s`" % results["binary_version"])
     add("- Machine: %s cores, %s, %s GiB memory; the benchmark took %s" % (
         machine.get("nproc", "?"), machine.get("cpu", "?"), machine.get("memory_gib", "?"),
-        duration_text(results.get("seconds", 0))))
+        duration_text(results.get("seconds", 0)) + (" (by command: %s)" % ", ".join(
+            duration_text(t) for t in results["seconds_by_command"]) if results.get("seconds_by_command") else "")))
     add("- Each case: once at `--pacing synchronous` (reproducible); at the default realtime pacing %s run(s) on "
         "the quiet machine and %s with one core kept busy, given as median [min–max]." % (
             results.get("runs", "?"), results.get("busy_runs", results.get("runs", "?"))))

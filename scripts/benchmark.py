@@ -452,6 +452,7 @@ def merge_results(loaded):
     if len(loaded) > 1:
         merged["merged_from"] = len(loaded)
         merged["command"] = " ; ".join(r.get("command", "?") for _, r in loaded)
+        merged["seconds_by_command"] = [r.get("seconds", 0) for _, r in loaded]
         for key in ("runs", "busy_runs"):
             values = [str(r.get(key, "?")) for _, r in loaded]
             merged[key] = values[0] if len(set(values)) == 1 else " or ".join(values) + " (by command)"

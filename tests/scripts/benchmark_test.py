@@ -212,6 +212,7 @@ class Merge(unittest.TestCase):
         self.assertEqual(merged["runs"], "2 or 3 (by command)")
         self.assertIn("kitti00", merged["command"])
         self.assertIn("case B", report.markdown(merged))
+        self.assertIn("the benchmark took 25 min 08 s (by command: 12 min 34 s, 12 min 34 s)", report.markdown(merged))
 
     def test_merged_results_keep_every_comparison(self):
         def compared(case, text, commit="abc"):
