@@ -120,7 +120,7 @@ def city_cases(frames):
     # Once, at the default pacing their bars judge (CTest holds synchronous merges of drives through one town).
     # Measured here: each drive's realtime run takes its frames at 10 Hz and a few seconds more, then the merge.
     variants = {"synchronous": 0, "quiet": 1, "busy": 0}
-    est = {"mono": 4 * (frames / 10 + 5) + 25, "stereo": 4 * (frames / 10 + 8) + 30}
+    est = {"mono": 4 * (frames / 10 + 5) + 60, "stereo": 4 * (frames / 10 + 8) + 80}
     title = "town seed %d, route seeds 1-4, %d frames each, %%s" % (CITY_SEED, frames)
     return [
         merge_case("city_mono_gps", "city", title % "mono, GPS every 30 frames, landmarks", drives(True),
