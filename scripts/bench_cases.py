@@ -385,7 +385,7 @@ def synthetic_cases(seeds, frames, blackout_modes, variants=None):
     cases = []
     # Measured here: a realtime run takes its frames at 10 Hz and a few seconds more; a synchronous one about
     # 100 ms a frame (mono) or 160 ms (stereo).
-    est = {"mono": frames / 10 + 8, "stereo": frames / 10 + 8}
+    est = frames / 10 + 8
     sync_est = {"mono": 0.1 * frames, "stereo": 0.16 * frames}
     geo_args = lambda p: ["--gps", os.path.join(p["town"], "oxts"), "--gps-every", "30", "--landmarks",
                           os.path.join(p["town"], "landmarks.csv"), "--segmenter", "truth-noisy:0.25"]
@@ -415,7 +415,7 @@ def synthetic_cases(seeds, frames, blackout_modes, variants=None):
                 "town seed %d, %d frames, %s, GPS every 30 frames, landmarks, labels truth-noisy:0.25" % (
                     seed, frames, mode),
                 lambda ctx, s=seed: {"sequence": town(ctx, s, frames), "town": town(ctx, s, frames)},
-                lambda p, m=mode: ["--mode", m] + geo_args(p), figures, est[mode], variants,
+                lambda p, m=mode: ["--mode", m] + geo_args(p), figures, est, variants,
                 sync_seconds=sync_est[mode]))
     seed = seeds[0]
     black = "%d:%d" % (frames // 2, frames // 2 + 20)
@@ -437,7 +437,7 @@ def synthetic_cases(seeds, frames, blackout_modes, variants=None):
         cases.append(slam_case(
             "town%d_blackout_%s" % (seed, mode), "synthetic",
             "town seed %d, frames %s black (2 s), %s" % (seed, black.replace(":", "-"), mode), inputs,
-            ["--mode", mode], figures, est[mode], variants, sync_seconds=sync_est[mode]))
+            ["--mode", mode], figures, est, variants, sync_seconds=sync_est[mode]))
     return cases
 
 

@@ -123,7 +123,9 @@ def compare(baseline, results):
     by the new runs' range (max - min), on the figure's worse side; a variant of one run is widened by the widest
     range among the figure's realtime variants. Synchronous: any change of an accuracy figure
     beyond a tiny tolerance is reported (`changed`, with whether it went the better or the worse way).
-    Returns a list of findings {case, figure, variant, kind ('worse' | 'changed' | 'failed'), baseline, new, text}.
+    A case of the same name run on other inputs (another title) is not compared: kind 'not compared'.
+    Returns a list of findings {case, figure, variant, kind ('worse' | 'changed' | 'failed' | 'not compared'),
+    baseline, new, text}.
     """
     findings = []
     old_cases = (baseline or {}).get("cases", {})
@@ -131,17 +133,13 @@ def compare(baseline, results):
         old = old_cases.get(case_name)
         if old is None or old.get("status") != "ok":
             continue
+        if case.get("status") == "failed":
+            findings.append(_case_finding(case_name, "failed", "failed (%s)" % case.get("reason", "")))
+            continue
         if old.get("title") and case.get("title") and old["title"] != case["title"]:
             # The same name, other inputs (a --quick town against the full one's): nothing to compare.
-            findings.append({"case": case_name, "figure": None, "variant": None, "kind": "not compared",
-                             "baseline": None, "new": None,
-                             "text": "%s: not compared, the baseline ran %s; this run %s" % (
-                                 case_name, old["title"], case["title"])})
-            continue
-        if case.get("status") == "failed":
-            findings.append({"case": case_name, "figure": None, "variant": None, "kind": "failed",
-                             "baseline": None, "new": None,
-                             "text": "%s: failed (%s)" % (case_name, case.get("reason", ""))})
+            findings.append(_case_finding(case_name, "not compared", "not compared, the baseline ran %s; this run %s"
+                                          % (old["title"], case["title"])))
             continue
         if case.get("status") != "ok":
             continue
@@ -151,6 +149,11 @@ def compare(baseline, results):
                 continue
             findings.extend(_compare_figure(case_name, name, before, figure))
     return findings
+
+
+def _case_finding(case_name, kind, text):
+    return {"case": case_name, "figure": None, "variant": None, "kind": kind, "baseline": None, "new": None,
+            "text": "%s: %s" % (case_name, text)}
 
 
 def _compare_figure(case_name, name, before, figure):

@@ -144,6 +144,8 @@ class Compare(unittest.TestCase):
         self.assertIn("no figure got worse", text)
         self.assertIn("Not compared (other inputs under the same name):\n- case_a: not compared, the baseline ran "
                       "case A; this run case A, longer", text)
+        failed = results({}, status="failed", cases={"case_a": dict(new["cases"]["case_a"], status="failed")})
+        self.assertEqual([f["kind"] for f in report.compare(old, failed)], ["failed"])
 
 
 class Markdown(unittest.TestCase):
