@@ -37,15 +37,20 @@ def merge_figures(merged_dir, drive_dirs):
     frames = sum(s["frames"] for s in sessions)
     in_main = sum(s["frames_in_main_map"] for s in sessions)
     figures["frames_in_main_map_pct"] = 100.0 * in_main / frames if frames else None
-    ratios, own_ates, world = [], [], []
+    ratios, shape_ratios, own_ates, world = [], [], [], []
     for s, drive in zip(sessions, drive_dirs):
         own = read_json(os.path.join(drive, "run.json")).get("ate_rmse")
         if own and s.get("ate_rmse_city") is not None:
             ratios.append(s["ate_rmse_city"] / own)
             own_ates.append(own)
+        # The drive aligned on its own in the merged map: what the merge did to its shape, apart from where
+        # the city's one alignment puts it.
+        if own and s.get("ate_rmse") is not None:
+            shape_ratios.append(s["ate_rmse"] / own)
         if s.get("world_rmse_m") is not None:
             world.append(s["world_rmse_m"])
     figures["ate_ratio_max"] = max(ratios) if ratios else None
+    figures["shape_ratio_max"] = max(shape_ratios) if shape_ratios else None
     figures["own_ate_max_m"] = max(own_ates) if own_ates else None
     figures["world_rmse_max_m"] = max(world) if world else None
     geo = run.get("geo") or {}
@@ -87,6 +92,8 @@ def city_figures(ate_ratio_bar=None, world_bar=None, landmark_bar=None):
         "gps_joins": spec("maps joined by GPS", "", None, digits=0),
         "ate_ratio_max": spec("ATE in the merged map (one alignment) / own ATE, worst drive", "x", "lower", digits=2,
                               bars=[ate_ratio_bar] if ate_ratio_bar else []),
+        "shape_ratio_max": spec("ATE in the merged map (its own alignment) / own ATE, worst drive", "x", "lower",
+                                digits=2),
         "own_ate_max_m": spec("own ATE, worst drive", "m", "lower", digits=3),
         "ate_city_m": spec("ATE of all drives, one alignment", "m", "lower", digits=3),
         "world_rmse_max_m": spec("WGS84 error, worst drive (no alignment)", "m", "lower", digits=2,

@@ -13,6 +13,7 @@ import unittest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 
 import bench_cases  # noqa: E402
+import bench_city  # noqa: E402
 import bench_geo  # noqa: E402
 import bench_report as report  # noqa: E402
 import benchmark  # noqa: E402
@@ -331,6 +332,32 @@ class LongDrive(unittest.TestCase):
             self.assertEqual(found["rtk"], os.path.join(tmp, "elsewhere", "track.kml"))
             with self.assertRaisesRegex(bench_cases.Skip, "KITTI 00"):
                 bench_cases.find_long_drive(os.path.join(tmp, "elsewhere"))
+
+
+class CityFigures(unittest.TestCase):
+    def write(self, path, content):
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w") as f:
+            json.dump(content, f)
+
+    def test_each_drive_against_its_own_run(self):
+        # Drive 1 is placed badly by the city's one alignment but keeps its shape; drive 2's shape got worse.
+        with tempfile.TemporaryDirectory() as tmp:
+            drives = [os.path.join(tmp, "drive1"), os.path.join(tmp, "drive2")]
+            self.write(os.path.join(drives[0], "run.json"), {"ate_rmse": 0.05})
+            self.write(os.path.join(drives[1], "run.json"), {"ate_rmse": 0.10})
+            self.write(os.path.join(tmp, "merged", "run.json"), {
+                "maps": {"count": 1, "place_merges": 1, "gps_joins": [], "sessions": [
+                    {"frames": 100, "frames_in_main_map": 100, "ate_rmse": 0.05, "ate_rmse_city": 0.12},
+                    {"frames": 50, "frames_in_main_map": 25, "ate_rmse": 0.13, "ate_rmse_city": 0.14}]},
+                "ate_rmse_city": 0.13})
+            f = bench_city.merge_figures(os.path.join(tmp, "merged"), drives)
+        self.assertAlmostEqual(f["ate_ratio_max"], 2.4)
+        self.assertAlmostEqual(f["shape_ratio_max"], 1.3)
+        self.assertAlmostEqual(f["own_ate_max_m"], 0.10)
+        self.assertAlmostEqual(f["frames_in_main_map_pct"], 125 / 150 * 100)
+        self.assertEqual(f["sessions"], 2)
+        self.assertIsNone(f["world_rmse_max_m"])
 
 
 class Plan(unittest.TestCase):
