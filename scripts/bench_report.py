@@ -247,10 +247,11 @@ def markdown(results, known_limits=""):
                                   results.get("date", "")))
     if results.get("binary_version"):
         add("- Binary: `%s`" % results["binary_version"])
+    took = duration_text(results.get("seconds", 0))
+    if results.get("seconds_by_command"):
+        took += " (by command: %s)" % ", ".join(duration_text(t) for t in results["seconds_by_command"])
     add("- Machine: %s cores, %s, %s GiB memory; the benchmark took %s" % (
-        machine.get("nproc", "?"), machine.get("cpu", "?"), machine.get("memory_gib", "?"),
-        duration_text(results.get("seconds", 0)) + (" (by command: %s)" % ", ".join(
-            duration_text(t) for t in results["seconds_by_command"]) if results.get("seconds_by_command") else "")))
+        machine.get("nproc", "?"), machine.get("cpu", "?"), machine.get("memory_gib", "?"), took))
     add("- Each case: once at `--pacing synchronous` (reproducible); at the default realtime pacing %s run(s) on "
         "the quiet machine and %s with one core kept busy, given as median [min–max]." % (
             results.get("runs", "?"), results.get("busy_runs", results.get("runs", "?"))))
