@@ -164,6 +164,41 @@ TEST(TwoView, TinyBaselineFailsForLowParallax) {
   EXPECT_NE(result.reason.find("parallax"), std::string::npos) << result.reason;
 }
 
+// A street far ahead (little parallax yet) and one close object in a corner of the image (much): the object
+// alone must not pass the parallax test, however many features it has.
+TEST(TwoView, OneCloseObjectDoesNotPassTheParallaxTestAlone) {
+  Scene scene;
+  scene.camera2_from_camera1 = Motion({0.3, 0.0, 0.6}, 1.0, 0.0);
+  std::mt19937 rng(21);
+  std::normal_distribution<double> noise(0.0, 0.5);
+  const auto add = [&](double u_min, double u_max, double v_min, double v_max, double d_min, double d_max,
+                       int count) {
+    std::uniform_real_distribution<double> u(u_min, u_max), v(v_min, v_max), depth(d_min, d_max);
+    for (int added = 0; added < count;) {
+      const Eigen::Vector2d pixel(u(rng), v(rng));
+      const Eigen::Vector3d point = depth(rng) * scene.camera.UnprojectDepth(pixel, 1.0);
+      const auto pixel2 = scene.camera.ProjectIfVisible(scene.camera2_from_camera1 * point);
+      if (!pixel2) continue;
+      scene.points.push_back(point);
+      scene.pixels1.push_back(pixel + Eigen::Vector2d(noise(rng), noise(rng)));
+      scene.pixels2.push_back(*pixel2 + Eigen::Vector2d(noise(rng), noise(rng)));
+      ++added;
+    }
+  };
+  add(0.0, scene.camera.width - 1.0, 0.0, scene.camera.height - 1.0, 25.0, 60.0, 400);
+  add(940.0, 1080.0, 290.0, 370.0, 1.5, 2.0, 80);  // within one cell of the 8 x 4 grid
+  TwoViewOptions options;
+  options.min_parallax_deg = 2.0;  // as the tracker asks
+  const TwoViewResult capped = InitializeTwoView(scene.pixels1, scene.pixels2, scene.camera, options);
+  EXPECT_FALSE(capped.success);
+  EXPECT_NE(capped.reason.find("low parallax"), std::string::npos) << capped.reason;
+
+  options.parallax_cell_share = 1.0;  // no cap: the object's 50 best points pass
+  const TwoViewResult uncapped = InitializeTwoView(scene.pixels1, scene.pixels2, scene.camera, options);
+  EXPECT_TRUE(uncapped.success) << uncapped.reason;
+  EXPECT_GT(uncapped.parallax_deg, 2.0 * capped.parallax_deg);
+}
+
 TEST(TwoView, RandomMatchesFail) {
   Scene scene = MakeScene(Structure::kGeneral, Motion({1.0, 0.0, 0.5}, 2.0, 0.0), 300, 0.5, 1.0, 9);
   const TwoViewResult result =
@@ -203,6 +238,12 @@ TEST(TwoView, BadInputThrows) {
   EXPECT_THROW(InitializeTwoView({{std::nan(""), 1.0}}, one, camera, TwoViewOptions{}), InvalidArgument);
   TwoViewOptions options;
   options.homography_ratio = 1.5;
+  EXPECT_THROW(InitializeTwoView(one, one, camera, options), InvalidArgument);
+  options = {};
+  options.parallax_cell_share = 0.0;
+  EXPECT_THROW(InitializeTwoView(one, one, camera, options), InvalidArgument);
+  options = {};
+  options.parallax_grid_rows = 0;
   EXPECT_THROW(InitializeTwoView(one, one, camera, options), InvalidArgument);
   EXPECT_THROW(InitializeTwoView(one, one, PinholeCamera{}, TwoViewOptions{}), InvalidArgument);
 }

@@ -90,14 +90,14 @@ TEST_P(BlackOut, TheMapIsFoundAgainAndTheDriveGoesOnInIt) {
   while (tracked_from > 0 && tracked.count(tracked_from - 1)) --tracked_from;
   EXPECT_LE(tracked_from, kEndBlack + 2) << "tracking.csv of " << run.string() << " says why";
 
-  // Within 5 % of the reproducible values (synchronous pacing): 0.1104 m mono, 0.0366 m stereo over 195 m.
+  // Within 5 % of the reproducible values (synchronous pacing): 0.2023 m mono, 0.0366 m stereo over 195 m.
   EvalOptions options;
   options.alignment = mono ? Alignment::kSim3 : Alignment::kSe3;
   const TrajectoryEvaluation e = EvaluateTrajectoryFiles(
       run / "trajectory.tum", black / "sequence" / "gt.txt", black / "sequence" / "times.txt", options);
   const double path = j.value("path_length_m", 0.0);
   EXPECT_GT(path, 150.0);
-  EXPECT_LE(e.ate.rmse, mono ? 0.116 : 0.0385) << "ATE " << e.ate.rmse << " m over " << path << " m";
+  EXPECT_LE(e.ate.rmse, mono ? 0.2125 : 0.0385) << "ATE " << e.ate.rmse << " m over " << path << " m";
 }
 
 std::string ModeName(const ::testing::TestParamInfo<std::string>& mode) { return mode.param; }

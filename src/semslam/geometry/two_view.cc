@@ -34,6 +34,10 @@ void TwoViewOptions::Check() const {
           "two-view: min_point_parallax_deg must be in [0, 90)");
   Require(min_parallax_deg >= 0 && min_parallax_deg < 90, "two-view: min_parallax_deg must be in [0, 90)");
   Require(parallax_rank >= 1, "two-view: parallax_rank must be >= 1");
+  Require(parallax_grid_cols >= 1 && parallax_grid_rows >= 1,
+          "two-view: the parallax grid needs a cell at least");
+  Require(parallax_cell_share > 0 && parallax_cell_share <= 1,
+          "two-view: parallax_cell_share must be in (0, 1]");
   Require(min_good_points >= 1, "two-view: min_good_points must be >= 1");
   Require(min_good_ratio >= 0 && min_good_ratio <= 1, "two-view: min_good_ratio must be in [0, 1]");
   Require(ambiguity_ratio > 0 && ambiguity_ratio <= 1, "two-view: ambiguity_ratio must be in (0, 1]");
@@ -196,7 +200,19 @@ Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, 
     const double dv = camera.fy * (p.y() / p.z() - n.y());
     return du * du + dv * dv;
   };
-  std::vector<double> parallaxes;
+  struct RankedPoint {
+    double parallax_deg;
+    int cell;
+  };
+  std::vector<RankedPoint> parallaxes;
+  const auto cell_of = [&](const Eigen::Vector2d& n) {
+    const double u = camera.fx * n.x() + camera.cx, v = camera.fy * n.y() + camera.cy;
+    const int col = std::clamp(static_cast<int>(u * options.parallax_grid_cols / camera.width), 0,
+                               options.parallax_grid_cols - 1);
+    const int row = std::clamp(static_cast<int>(v * options.parallax_grid_rows / camera.height), 0,
+                               options.parallax_grid_rows - 1);
+    return row * options.parallax_grid_cols + col;
+  };
   for (size_t i = 0; i < n1.size(); ++i) {
     if (!inliers[i]) continue;
     const Eigen::Vector3d b1 = n1[i].homogeneous();
@@ -232,13 +248,19 @@ Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, 
     }
     if (!good) continue;
     ++h.good;
-    parallaxes.push_back(std::acos(cos_parallax) / kDegree);
+    parallaxes.push_back({std::acos(cos_parallax) / kDegree, cell_of(n1[i])});
   }
-  if (!parallaxes.empty()) {
-    const size_t k = std::min(static_cast<size_t>(options.parallax_rank), parallaxes.size()) - 1;
-    std::nth_element(parallaxes.begin(), parallaxes.begin() + static_cast<std::ptrdiff_t>(k), parallaxes.end(),
-                     std::greater<>());
-    h.parallax_deg = parallaxes[k];
+  // Largest first (ties by cell, so the order is the same on every machine), each cell up to its cap.
+  std::sort(parallaxes.begin(), parallaxes.end(), [](const RankedPoint& a, const RankedPoint& b) {
+    return a.parallax_deg != b.parallax_deg ? a.parallax_deg > b.parallax_deg : a.cell < b.cell;
+  });
+  const int cap = static_cast<int>(std::ceil(options.parallax_cell_share * options.parallax_rank));
+  std::vector<int> per_cell(static_cast<size_t>(options.parallax_grid_cols * options.parallax_grid_rows), 0);
+  int ranked = 0;
+  for (const RankedPoint& p : parallaxes) {
+    if (per_cell[static_cast<size_t>(p.cell)]++ >= cap) continue;
+    h.parallax_deg = p.parallax_deg;  // the least counted so far
+    if (++ranked == options.parallax_rank) break;
   }
   return h;
 }

@@ -44,6 +44,13 @@ struct TwoViewOptions {
   // fewer than ambiguity_ratio times the best's good points.
   double min_parallax_deg = 1.0;
   int parallax_rank = 50;
+  // The ranking counts at most parallax_cell_share * parallax_rank points (rounded up) from any one cell of a
+  // parallax_grid_cols x parallax_grid_rows grid over image 1: one object close to the camera cannot pass the
+  // test alone, least of all one that moves on its own (a vehicle's features can fit the epipolar geometry
+  // by chance, with a parallax the static scene does not have yet). 1: no cap.
+  int parallax_grid_cols = 8;
+  int parallax_grid_rows = 4;
+  double parallax_cell_share = 0.125;
   int min_good_points = 50;
   double min_good_ratio = 0.9;
   double ambiguity_ratio = 0.75;
@@ -71,7 +78,7 @@ struct TwoViewResult {
   int num_inliers = 0;        // of the selected model
   int num_good = 0;           // good points of the best hypothesis
   int second_best_good = 0;   // good points of the second best hypothesis
-  double parallax_deg = 0.0;  // the parallax_rank-th largest parallax of the best hypothesis
+  double parallax_deg = 0.0;  // the parallax_rank-th largest parallax of the best hypothesis (cells capped)
 };
 
 // `pixels1[i]` and `pixels2[i]` are the i-th match in images 1 and 2 (raw pixels: the camera's distortion is

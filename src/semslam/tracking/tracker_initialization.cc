@@ -91,7 +91,11 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   const TwoViewResult two_view =
       InitializeTwoView(pixels1, pixels2, init_frame_->data().camera, two_view_options);
   if (!two_view.success) {
-    spdlog::debug("frame {}: monocular initialization failed: {}", frame.id(), two_view.reason);
+    spdlog::debug(
+        "frame {}: monocular initialization failed: {} ({}, S_H/(S_H+S_F) {:.2f}, {} inliers, {} and {} good "
+        "in the best two motions)",
+        frame.id(), two_view.reason, two_view.model.empty() ? "no model" : two_view.model,
+        two_view.score_ratio, two_view.num_inliers, two_view.num_good, two_view.second_best_good);
     // Kept to be posed in the map once it starts (a few dozen frames at most: older ones go).
     if (init_between_frames_.size() >= kMaxBetweenFrames) init_between_frames_.pop_front();
     init_between_frames_.push_back(frame);
