@@ -179,13 +179,23 @@ struct Hypothesis {
   Points3d points;
 };
 
+// The cell of the parallax ranking's grid (TwoViewOptions::parallax_grid_cols/rows) an ideal pixel falls in.
+int ParallaxCell(const Eigen::Vector2d& pixel, const PinholeCamera& camera, const TwoViewOptions& options) {
+  const int col = std::clamp(static_cast<int>(pixel.x() * options.parallax_grid_cols / camera.width), 0,
+                             options.parallax_grid_cols - 1);
+  const int row = std::clamp(static_cast<int>(pixel.y() * options.parallax_grid_rows / camera.height), 0,
+                             options.parallax_grid_rows - 1);
+  return row * options.parallax_grid_cols + col;
+}
+
 // Triangulates every inlier under camera2_from_camera1 (|t| = 1, or 0 for a pure rotation) and counts the
 // matches it explains: reprojection within the threshold in both images, in front of both cameras when the
 // parallax is enough to tell; a match with too little parallax to triangulate is explained by the rotation
 // alone when its point at infinity transfers within the threshold.
+// `cells1[i]`: match i's ParallaxCell in image 1.
 Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, const Points2d& n2,
-                       const std::vector<bool>& inliers, const PinholeCamera& camera,
-                       const TwoViewOptions& options) {
+                       const std::vector<int>& cells1, const std::vector<bool>& inliers,
+                       const PinholeCamera& camera, const TwoViewOptions& options) {
   Hypothesis h;
   h.camera2_from_camera1 = camera2_from_camera1;
   h.triangulated.assign(n1.size(), false);
@@ -205,14 +215,6 @@ Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, 
     int cell;
   };
   std::vector<RankedPoint> parallaxes;
-  const auto cell_of = [&](const Eigen::Vector2d& n) {
-    const double u = camera.fx * n.x() + camera.cx, v = camera.fy * n.y() + camera.cy;
-    const int col = std::clamp(static_cast<int>(u * options.parallax_grid_cols / camera.width), 0,
-                               options.parallax_grid_cols - 1);
-    const int row = std::clamp(static_cast<int>(v * options.parallax_grid_rows / camera.height), 0,
-                               options.parallax_grid_rows - 1);
-    return row * options.parallax_grid_cols + col;
-  };
   for (size_t i = 0; i < n1.size(); ++i) {
     if (!inliers[i]) continue;
     const Eigen::Vector3d b1 = n1[i].homogeneous();
@@ -248,7 +250,7 @@ Hypothesis CheckMotion(const Rigid3d& camera2_from_camera1, const Points2d& n1, 
     }
     if (!good) continue;
     ++h.good;
-    parallaxes.push_back({std::acos(cos_parallax) / kDegree, cell_of(n1[i])});
+    parallaxes.push_back({std::acos(cos_parallax) / kDegree, cells1[i]});
   }
   // Largest first (ties by cell, so the order is the same on every machine), each cell up to its cap.
   std::sort(parallaxes.begin(), parallaxes.end(), [](const RankedPoint& a, const RankedPoint& b) {
@@ -290,6 +292,7 @@ TwoViewResult InitializeTwoView(const std::vector<Eigen::Vector2d>& pixels1,
 
   // Undistorted: normalized coordinates for the geometry, ideal pixels (K n) for the errors.
   Points2d normalized1(n), normalized2(n), ideal1(n), ideal2(n);
+  std::vector<int> cells1(n);
   const auto ideal = [&](const Eigen::Vector2d& m) {
     return Eigen::Vector2d(camera.fx * m.x() + camera.cx, camera.fy * m.y() + camera.cy);
   };
@@ -298,6 +301,7 @@ TwoViewResult InitializeTwoView(const std::vector<Eigen::Vector2d>& pixels1,
     normalized2[i] = camera.PixelToNormalized(pixels2[i]);
     ideal1[i] = ideal(normalized1[i]);
     ideal2[i] = ideal(normalized2[i]);
+    cells1[i] = ParallaxCell(ideal1[i], camera, options);
   }
 
   RansacSampler sampler(options.seed);
@@ -378,7 +382,7 @@ TwoViewResult InitializeTwoView(const std::vector<Eigen::Vector2d>& pixels1,
   }
   std::vector<Hypothesis> hypotheses;
   for (const Rigid3d& m : motions)
-    hypotheses.push_back(CheckMotion(m, normalized1, normalized2, fit.inliers, camera, options));
+    hypotheses.push_back(CheckMotion(m, normalized1, normalized2, cells1, fit.inliers, camera, options));
   std::sort(hypotheses.begin(), hypotheses.end(),
             [](const Hypothesis& a, const Hypothesis& b) { return a.good > b.good; });
   Hypothesis& best = hypotheses.front();

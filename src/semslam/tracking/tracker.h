@@ -53,8 +53,8 @@ struct TrackerOptions {
   int init_match_max_level = 2;
   int init_match_level_difference = 1;
   // Monocular initialization accepts a two-view reconstruction when the init_parallax_rank-th most
-  // parallax-rich point has at least init_min_parallax_deg, an eighth of them at most from one part of the
-  // image (see geometry/two_view.h).
+  // parallax-rich point has at least init_min_parallax_deg, no one part of the image counting for more than
+  // its share (see geometry/two_view.h).
   double init_min_parallax_deg = 2.0;
   int init_parallax_rank = 50;
   int init_min_points = 100;  // well-triangulated points needed
