@@ -4,9 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cmath>
-#include <fstream>
-#include <functional>
+#include <cctype>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -32,9 +30,10 @@
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/report/html_report.h"
-#include "semslam/sim/scene_file.h"
 #include "semslam/system/atlas_outputs.h"
+#include "semslam/system/merge_inputs.h"
 #include "semslam/system/merge_places.h"
+#include "semslam/system/merge_session_frames.h"
 #include "semslam/system/run_output_dir.h"
 #include "semslam/system/slam_system.h"
 
@@ -50,159 +49,6 @@ void SessionMergeOptions::Check() const {
 }
 
 namespace {
-
-// A session of an input whose frames are known (a run's own drive, or a drive an earlier merge wrote).
-struct InputSession {
-  std::string sequence;  // its sequence folder, for the ground truth
-  std::string camera;
-  fs::path frames_csv;  // each frame's map and pose in it, as the input's map holds them
-  // The GPS log its run was given (empty: none), one fix every gps_every frames, and the antenna's place in
-  // the camera frame when the run was told it.
-  std::string gps;
-  int gps_every = 30;
-  std::optional<Eigen::Vector3d> lever_arm;
-};
-
-std::optional<Eigen::Vector3d> LeverArmOf(const nlohmann::json& j) {
-  if (!j.contains("gps_lever_arm") || j["gps_lever_arm"].is_null()) return std::nullopt;
-  const auto v = j["gps_lever_arm"].get<std::vector<double>>();
-  if (v.size() != 3)
-    throw nlohmann::json::other_error::create(501, "gps_lever_arm: 3 numbers expected", nullptr);
-  return Eigen::Vector3d(v[0], v[1], v[2]);
-}
-
-// One run folder given to merge.
-struct InputRun {
-  fs::path dir;
-  std::string mode;  // "mono" or "stereo"
-  std::vector<fs::path> catalogues;
-  // By session index in the input's map file; a run's own session is its file's last (kLastSession).
-  std::map<std::uint32_t, InputSession> sessions;
-};
-constexpr std::uint32_t kLastSession = UINT32_MAX;
-
-InputRun ReadInputRun(const fs::path& dir) {
-  InputRun run;
-  run.dir = fs::absolute(dir);
-  if (!fs::is_regular_file(dir / "map.semslam"))
-    throw InputError(dir / "map.semslam", "missing: not a run folder with a saved map");
-  const fs::path json_path = dir / "run.json";
-  const nlohmann::json j = ReadJsonFile(json_path);
-  try {
-    run.mode = j.at("mode").get<std::string>();
-    if (run.mode != "mono" && run.mode != "stereo")
-      throw InputError(json_path, "mode: expected mono or stereo");
-    if (j.value("command", std::string("run")) == "merge") {
-      for (const auto& c : j.value("landmark_catalogues", nlohmann::json::array()))
-        run.catalogues.emplace_back(c.get<std::string>());
-      for (const auto& s : j.at("maps").at("sessions")) {
-        if (!s.contains("frames_csv")) continue;
-        run.sessions[s.at("id").get<std::uint32_t>()] = {s.value("sequence", std::string()),
-                                                         s.value("camera", std::string()),
-                                                         run.dir / s.at("frames_csv").get<std::string>(),
-                                                         s.value("gps", std::string()),
-                                                         s.value("gps_every", 30),
-                                                         LeverArmOf(s)};
-      }
-    } else {
-      const std::string landmarks = j.at("config").value("landmarks", std::string());
-      if (!landmarks.empty()) run.catalogues.emplace_back(landmarks);
-      if (fs::is_regular_file(dir / "frames.csv")) {
-        const nlohmann::json& config = j.at("config");
-        // The sequence as the run was given it (run.json's own "sequence" is the folder of its images).
-        run.sessions[kLastSession] = {config.value("sequence", j.at("sequence").get<std::string>()),
-                                      j.value("camera", std::string()),
-                                      run.dir / "frames.csv",
-                                      config.value("gps", std::string()),
-                                      config.value("gps_every", 30),
-                                      LeverArmOf(config)};
-      }
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(json_path, fmt::format("not a run's run.json: {}", e.what()));
-  }
-  return run;
-}
-
-// The keyframes of one session in one map as the input held them, to carry its frames through every move the
-// merge makes (frames follow the keyframe nearest in frame index, as in a run).
-struct Anchor {
-  KeyFrame* keyframe = nullptr;
-  Rigid3d world_from_keyframe;  // as loaded
-  double scale_correction = 1.0;
-};
-using AnchorsByFrame = std::map<std::uint64_t, Anchor>;  // by frame index
-
-// A frame's pose now: moved with its anchor keyframe (rigidly, and scaled by the keyframe's scale change).
-std::optional<FramePose> FollowAnchor(const AnchorsByFrame& anchors, const FramePose& frame) {
-  const Anchor* best = nullptr;
-  std::uint64_t best_gap = UINT64_MAX;
-  for (auto it = anchors.lower_bound(frame.frame_index);; --it) {
-    if (it != anchors.end() && !it->second.keyframe->is_bad()) {
-      const std::uint64_t gap =
-          it->first > frame.frame_index ? it->first - frame.frame_index : frame.frame_index - it->first;
-      if (gap < best_gap) {
-        best_gap = gap;
-        best = &it->second;
-      }
-      if (it->first <= frame.frame_index) break;
-    }
-    if (it == anchors.begin()) break;
-  }
-  if (best == nullptr) return std::nullopt;
-  const KeyFrame& kf = *best->keyframe;
-  const double scale = kf.scale_correction() / best->scale_correction;
-  const Sim3d now_from_loaded = Sim3d(kf.world_from_camera()) *
-                                Sim3d(scale, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero()) *
-                                Sim3d(best->world_from_keyframe).Inverse();
-  FramePose moved = frame;
-  moved.world_from_camera = now_from_loaded.TransformPose(frame.world_from_camera);
-  moved.map_id = kf.map_id();
-  return moved;
-}
-
-// What one session of the atlas is, and where its frames are.
-struct SessionRecord {
-  std::uint32_t id = 0;
-  fs::path run;
-  std::uint32_t first_map_id = 0;  // where its input's map ids went in the atlas
-  std::optional<InputSession> input;
-  std::map<std::uint32_t, AnchorsByFrame> anchors;  // by the map id the keyframes had when loaded
-  std::vector<FramePose> frames;                    // moved, after the merge
-};
-
-// A session's good keyframes where the atlas holds them now, in frame order.
-std::vector<FramePose> SessionKeyFrames(const SessionRecord& s) {
-  std::vector<FramePose> keyframes;
-  for (const auto& [loaded_map, anchors] : s.anchors) {
-    for (const auto& [frame, anchor] : anchors) {
-      if (anchor.keyframe->is_bad()) continue;
-      keyframes.push_back({frame, static_cast<long long>(anchor.keyframe->id()), anchor.keyframe->timestamp(),
-                           anchor.keyframe->world_from_camera(), anchor.keyframe->map_id(), false});
-    }
-  }
-  std::sort(keyframes.begin(), keyframes.end(),
-            [](const FramePose& a, const FramePose& b) { return a.frame_index < b.frame_index; });
-  return keyframes;
-}
-
-// A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
-// of theirs left.
-std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored) {
-  if (!s.input) return SessionKeyFrames(s);
-  std::vector<FramePose> frames;
-  for (const FramePose& f : ReadFramesCsv(s.input->frames_csv)) {
-    const auto anchors = s.anchors.find(f.map_id + s.first_map_id);
-    const std::optional<FramePose> moved =
-        anchors != s.anchors.end() ? FollowAnchor(anchors->second, f) : std::nullopt;
-    if (moved) {
-      frames.push_back(*moved);
-    } else if (unanchored != nullptr) {
-      ++*unanchored;
-    }
-  }
-  return frames;
-}
 
 // Every drive's GPS fixes in one pose graph with the merged map's own links (geo/gps_fusion.h), the drives
 // one after another in time and frame index: each merge took one map's place in the world and the others
@@ -295,55 +141,6 @@ std::string SessionFolderName(const MapSession& s) {
     if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
   }
   return fmt::format("{:03d}-{}", s.id, name);
-}
-
-// Catalogues of all runs, each landmark once (same name within a metre).
-std::vector<Landmark> UnionOfCatalogues(const std::vector<fs::path>& paths) {
-  std::vector<Landmark> out;
-  std::set<fs::path> seen;
-  for (const fs::path& path : paths) {
-    if (!seen.insert(fs::absolute(path)).second) continue;
-    for (Landmark& l : ReadLandmarks(path)) {
-      const bool duplicate = std::any_of(out.begin(), out.end(), [&](const Landmark& o) {
-        const double north = (o.position.latitude_deg - l.position.latitude_deg) * 111320.0;
-        const double east = (o.position.longitude_deg - l.position.longitude_deg) * 111320.0 *
-                            std::cos(l.position.latitude_deg * M_PI / 180.0);
-        return o.name == l.name && std::hypot(north, east) < 1.0;
-      });
-      if (!duplicate) out.push_back(std::move(l));
-    }
-  }
-  return out;
-}
-
-// A drive's ground truth, in its town's ENU frame when it has one (the synthetic city's scene.json: every
-// drive of a town in one frame), else in its sequence's own frame.
-struct SessionTruth {
-  Trajectory world_from_camera;
-  std::optional<EnuFrame> enu;                  // the frame of world_from_camera, when it is the town's ENU
-  std::vector<SceneTruth::Landmark> landmarks;  // the town's, in that frame
-};
-
-std::optional<SessionTruth> TruthOf(const InputSession& session, bool stereo) {
-  try {
-    SequenceOptions options;
-    options.camera = session.camera;
-    options.stereo = stereo;
-    std::optional<Trajectory> truth = OpenSequence(session.sequence, options)->GroundTruth();
-    if (!truth) return std::nullopt;
-    SessionTruth out{std::move(*truth), std::nullopt, {}};
-    if (const auto scene = sim::FindSceneJson(session.sequence)) {
-      const SceneTruth town = ReadSceneTruth(scene->parent_path());
-      for (StampedPose& p : out.world_from_camera)
-        p.world_from_camera = town.enu_from_world * p.world_from_camera;
-      out.enu = EnuFrame(town.origin);
-      out.landmarks = town.landmarks;
-    }
-    return out;
-  } catch (const std::exception& e) {
-    spdlog::warn("no ground truth for {}: {}", session.sequence, e.what());
-    return std::nullopt;
-  }
 }
 
 Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_id,
