@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The one place semslam's Debian (bookworm) dependencies are listed.
 # Idempotent: installs only the packages that are missing.
+#   scripts/install-deps.sh [--slurm]   # --slurm: also Slurm and munge, for the test of scripts/city.sbatch on a
+#                                       # one-node cluster (scripts/slurm-local.sh; CI does)
 set -euo pipefail
 
 packages=(
@@ -22,6 +24,12 @@ packages=(
   python3-dev python3-numpy pybind11-dev
   python3-distributed
 )
+for a in "$@"; do
+  case "$a" in
+    --slurm) packages+=(slurmctld slurmd slurm-client munge) ;;
+    *) echo "usage: scripts/install-deps.sh [--slurm]" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
