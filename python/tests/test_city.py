@@ -98,6 +98,32 @@ def alive(pid):
         return False
 
 
+def assert_complete_city(test, sequences, out, output):
+    """The city `semslam.city` wrote into `out` from `sequences`: every drive's run complete, one session per drive,
+    nothing half-written (`output`: the command's output, shown when an assertion fails)."""
+    names = [os.path.basename(os.path.dirname(os.path.dirname(s))) for s in sequences]
+    test.assertEqual(sorted(os.listdir(os.path.join(out, "drives"))), sorted(names), output)
+    for name in names:
+        run = read_json(os.path.join(out, "drives", name, "run.json"))
+        test.assertEqual(run["status"], "complete")
+        test.assertEqual(run["frames"], FRAMES)
+        with open(os.path.join(out, "drives", name, "trajectory.kitti")) as f:
+            test.assertEqual(sum(1 for line in f if line.strip()), FRAMES)
+    city = read_json(os.path.join(out, "city", "run.json"))
+    sessions = city["maps"]["sessions"]
+    test.assertEqual(len(sessions), len(sequences), sessions)
+    # A session per drive: named after its sequence folder (sequences/00), its source the folder itself.
+    test.assertEqual(sorted(os.path.realpath(s["source"]) for s in sessions),
+                     sorted(os.path.realpath(s) for s in sequences))
+    test.assertEqual([s["name"] for s in sessions], ["00"] * len(sequences))
+    test.assertTrue(os.path.isfile(os.path.join(out, "city", "map.semslam")))
+    made_of = read_json(os.path.join(out, "city.json"))
+    test.assertEqual(sorted(d["sequence"] for d in made_of["drives"]), sorted(sequences))
+    test.assertEqual([d["frames"] for d in made_of["drives"]], [FRAMES] * len(sequences))
+    test.assertEqual(partials_under(out), [])
+    test.assertFalse(os.path.exists(os.path.join(out, "merges")))
+
+
 class CityRun:
     """`python3 -m semslam.city` as a process whose output lines are read as they come."""
 
@@ -187,34 +213,11 @@ class CityOnDaskTest(unittest.TestCase):
             CityOnDaskTest.first = (out, code, output)
         return CityOnDaskTest.first
 
-    def assert_complete_city(self, out, output):
-        names = [os.path.basename(os.path.dirname(os.path.dirname(s))) for s in self.sequences]
-        self.assertEqual(sorted(os.listdir(os.path.join(out, "drives"))), sorted(names), output)
-        for name in names:
-            run = read_json(os.path.join(out, "drives", name, "run.json"))
-            self.assertEqual(run["status"], "complete")
-            self.assertEqual(run["frames"], FRAMES)
-            with open(os.path.join(out, "drives", name, "trajectory.kitti")) as f:
-                self.assertEqual(sum(1 for line in f if line.strip()), FRAMES)
-        city = read_json(os.path.join(out, "city", "run.json"))
-        sessions = city["maps"]["sessions"]
-        self.assertEqual(len(sessions), len(self.sequences), sessions)
-        # A session per drive: named after its sequence folder (sequences/00), its source the folder itself.
-        self.assertEqual(sorted(os.path.realpath(s["source"]) for s in sessions),
-                         sorted(os.path.realpath(s) for s in self.sequences))
-        self.assertEqual([s["name"] for s in sessions], ["00"] * len(self.sequences))
-        self.assertTrue(os.path.isfile(os.path.join(out, "city", "map.semslam")))
-        made_of = read_json(os.path.join(out, "city.json"))
-        self.assertEqual(sorted(d["sequence"] for d in made_of["drives"]), sorted(self.sequences))
-        self.assertEqual([d["frames"] for d in made_of["drives"]], [FRAMES] * len(self.sequences))
-        self.assertEqual(partials_under(out), [])
-        self.assertFalse(os.path.exists(os.path.join(out, "merges")))
-
     def test_a_city_of_three_drives(self):
         self.require_merge()
         out, code, output = self.first_city()
         self.assertEqual(code, 0, output)
-        self.assert_complete_city(out, output)
+        assert_complete_city(self, self.sequences, out, output)
         for name in ("route1", "route2", "route3"):
             self.assertRegex(output, rf"drive city_drive_seed1_{name}_frames{FRAMES}: done: {FRAMES} frames")
         self.assertIn("merge city: done: 3 sessions", output)
@@ -257,7 +260,7 @@ class CityOnDaskTest(unittest.TestCase):
         self.assertEqual([p for p in orphans if alive(p)], [],
                          "the killed worker's semslam process lived on")
         self.assertFalse(os.path.exists(partial[0]))
-        self.assert_complete_city(out, output)
+        assert_complete_city(self, self.sequences, out, output)
         self.assertRegex(output, rf"drive {drive}: done: {FRAMES} frames")
 
     def test_a_failing_drive_fails_the_city_with_its_error(self):
