@@ -38,8 +38,14 @@ struct SessionRecord {
 // A session's good keyframes where the atlas holds them now, in frame order.
 std::vector<FramePose> SessionKeyFrames(const SessionRecord& s);
 
+// How a frame's offset from its keyframe is scaled when the keyframe moves.
+enum class FrameScale {
+  kKeyFrame,          // by the scale the keyframe carries (stereo: none)
+  kNeighbourSpacing,  // by the stretch of the keyframe's spacing to its drive's nearest keyframes (monocular)
+};
+
 // A session's frames where the atlas holds them now (its keyframes otherwise), and how many have no keyframe
 // of theirs left.
-std::vector<FramePose> SessionFrames(const SessionRecord& s, size_t* unanchored);
+std::vector<FramePose> SessionFrames(const SessionRecord& s, FrameScale frame_scale, size_t* unanchored);
 
 }  // namespace semslam

@@ -56,7 +56,7 @@ namespace {
 // where the fusion put its keyframes. Returns run.json's figures, or null when no drive had fixes enough.
 nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
                                    const std::vector<SessionRecord>& sessions, const EnuFrame& world,
-                                   bool stereo) {
+                                   bool stereo, FrameScale frame_scale) {
   GpsFusionInput input;
   input.enu_from_map = Sim3d();  // the map is in the world already
   GpsFusionOptions options;
@@ -66,7 +66,7 @@ nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
   for (size_t k = 0; k < sessions.size(); ++k) {
     const SessionRecord& s = sessions[k];
     if (!s.input || s.input->gps.empty()) continue;
-    std::vector<FramePose> frames = SessionFrames(s, nullptr);
+    std::vector<FramePose> frames = SessionFrames(s, frame_scale, nullptr);
     std::erase_if(frames, [&](const FramePose& f) { return f.map_id != main_map || f.predicted; });
     if (frames.size() < 2) continue;
     GpsLog log;
@@ -168,6 +168,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     }
   }
   const bool stereo = runs.front().mode == "stereo";
+  const FrameScale frame_scale = stereo ? FrameScale::kKeyFrame : FrameScale::kNeighbourSpacing;
   OutputDirOptions output_dir_options;
   output_dir_options.overwrite = options.overwrite;
   output_dir_options.command = "merge";
@@ -295,7 +296,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   // 6. The merged map in the world: placed by every drive's GPS.
   nlohmann::json gps_fusion = nullptr;
   if (world_main && options.gps_fusion)
-    gps_fusion = FuseSessionsWithGps(slam, *world_main, sessions, *world, stereo);
+    gps_fusion = FuseSessionsWithGps(slam, *world_main, sessions, *world, stereo, frame_scale);
 
   // A point that no adjustment held (seen from nearly one direction) may have run off towards infinity: not a
   // place of the map, and one the map file refuses.
@@ -347,7 +348,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
           {"id", s.id}, {"name", info.name}, {"source", info.source}, {"run", s.run.string()}};
       const std::vector<FramePose> keyframes = SessionKeyFrames(s);
       size_t unanchored = 0;
-      s.frames = SessionFrames(s, &unanchored);
+      s.frames = SessionFrames(s, frame_scale, &unanchored);
       std::map<std::uint32_t, size_t> frames_per_map;
       for (const FramePose& f : s.frames) ++frames_per_map[f.map_id];
       const size_t in_main = frames_per_map.count(main_map) ? frames_per_map.at(main_map) : 0;
