@@ -198,6 +198,20 @@ TEST(OptimJacobians, Sim3Reprojection) {
   }
 }
 
+// A trial step to an overflowing scale (seen: log-scale 9292 in a loop's Sim(3) refinement) is refused, not
+// evaluated to NaN residuals.
+TEST(OptimJacobians, Sim3ReprojectionRefusesAnOverflowingScale) {
+  const PinholeCamera camera = KittiCamera();
+  std::unique_ptr<ceres::CostFunction> into1(optim_internal::NewSim3ReprojectionCost(
+      camera, Eigen::Vector3d(0.5, -0.2, 10.0), Eigen::Vector2d(500, 200), 0.7, true));
+  std::vector<double> x = Packed(Sim3d());
+  const double* parameters[] = {x.data()};
+  double residuals[2];
+  EXPECT_TRUE(into1->Evaluate(parameters, residuals, nullptr));
+  x[7] = 9292.0;
+  EXPECT_FALSE(into1->Evaluate(parameters, residuals, nullptr));
+}
+
 TEST(OptimManifolds, PlusMinusRoundTrip) {
   std::mt19937 rng(5);
   const optim_internal::RigidLeftManifold rigid;

@@ -26,11 +26,12 @@ inline Eigen::Matrix3d SO3RightJacobianInverse(const Eigen::Vector3d& theta) {
   return SO3LeftJacobianInverse(-theta);
 }
 
-// Whether a camera-frame point projects: in front of the camera by more than a rounding error. The cost
-// functions and the checks that choose which observations they get must agree on it, or one point at the
-// very centre of a camera stops a whole solve at its first evaluation (Ceres: "Residual and Jacobian
-// evaluation failed").
-inline bool InFrontOfCamera(const Eigen::Vector3d& p) { return p.z() > 1e-9; }
+// Whether a camera-frame point projects: finite, and in front of the camera by more than a rounding error.
+// The cost functions and the checks that choose which observations they get must agree on it, or one point at
+// the very centre of a camera stops a whole solve at its first evaluation (Ceres: "Residual and Jacobian
+// evaluation failed"). A trial step that overflows (a Sim(3) step to scale exp(9000)) is refused here rather
+// than handed to Ceres as NaN residuals, which it rejects the same way but logs page by page.
+inline bool InFrontOfCamera(const Eigen::Vector3d& p) { return p.allFinite() && p.z() > 1e-9; }
 
 // The optimizers model an ideal pinhole (keypoints are undistorted before they get here).
 void RequirePinhole(const PinholeCamera& camera, const char* who);
