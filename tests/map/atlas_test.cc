@@ -84,6 +84,54 @@ TEST(Atlas, MergingMovesEveryKeyFrameAndPointAndLeavesOneOrigin) {
   EXPECT_EQ(map.StartNewMap(), 2u);
 }
 
+TEST(Atlas, AGapLinkStandsBetweenTheGoodKeyFramesForItsEnds) {
+  // before (kf 1, its parent kf 0) in map 0; after (kf 3, its parent kf 2) in map 1. Culling both ends hands
+  // the link to their parents, through the poses relative to them that culling keeps.
+  Map map;
+  auto lock = map.WriteLock();
+  KeyFrame* k0 = AddKeyFrameWithPoints(map, 0, 0.0, 3);
+  KeyFrame* before = AddKeyFrameWithPoints(map, 1, 1.0, 3);
+  map.StartNewMap();
+  KeyFrame* k2 = AddKeyFrameWithPoints(map, 2, 0.0, 3);
+  KeyFrame* after = AddKeyFrameWithPoints(map, 3, 2.0, 3);
+  before->ChangeParent(k0);
+  after->ChangeParent(k2);
+  before->SetPose(Rigid3d(QuaternionExp(Eigen::Vector3d(0, 0.2, 0)), Eigen::Vector3d(0.5, 0, -1.0)));
+  after->SetPose(Rigid3d(QuaternionExp(Eigen::Vector3d(0.1, -0.3, 0)), Eigen::Vector3d(0, 0.2, -2.0)));
+  const Rigid3d after_from_before(QuaternionExp(Eigen::Vector3d(0, -0.4, 0.05)), Eigen::Vector3d(1, 0, -3));
+  const GapLink link{before, after, after_from_before};
+
+  std::optional<GapEdge> edge = ResolveGapLink(link);
+  ASSERT_TRUE(edge.has_value());
+  EXPECT_EQ(edge->before, before);
+  EXPECT_EQ(edge->after, after);
+  EXPECT_LT((edge->before_from_after.translation - after_from_before.Inverse().translation).norm(), 1e-12);
+
+  // A monocular loop that stretches the map around `before` twice as large stretches the link with it.
+  before->CorrectScale(2.0);
+  edge = ResolveGapLink(link);
+  ASSERT_TRUE(edge.has_value());
+  EXPECT_LT((edge->before_from_after.translation - 2.0 * after_from_before.Inverse().translation).norm(),
+            1e-12);
+  before->CorrectScale(0.5);
+
+  // k0 and k2 stand in for the culled ends: k0_from_k2 = k0_from_before * before_from_after * after_from_k2.
+  const Rigid3d expected = k0->camera_from_world() * before->world_from_camera() *
+                           after_from_before.Inverse() * after->camera_from_world() * k2->world_from_camera();
+  before->SetBad();
+  after->SetBad();
+  edge = ResolveGapLink(link);
+  ASSERT_TRUE(edge.has_value());
+  EXPECT_EQ(edge->before, k0);
+  EXPECT_EQ(edge->after, k2);
+  EXPECT_LT((edge->before_from_after.translation - expected.translation).norm(), 1e-9);
+  EXPECT_LT(edge->before_from_after.rotation.angularDistance(expected.rotation), 1e-9);
+
+  // A map given up (its keyframes bad without parents) leaves the link without an end.
+  map.DiscardMap(1);
+  EXPECT_FALSE(ResolveGapLink(link).has_value());
+}
+
 TEST(Atlas, DiscardingAMapErasesOnlyItsKeyFramesAndPoints) {
   Map map;
   auto lock = map.WriteLock();

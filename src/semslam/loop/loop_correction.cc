@@ -22,6 +22,10 @@ namespace semslam {
 
 namespace {
 
+// A gap link's prediction is rough (the motion of before a loss carried over it): its information is this
+// share of a covisibility edge's.
+constexpr double kGapLinkWeight = 0.1;
+
 // How much lower than the pipeline's other threads the global BA runs.
 constexpr int kGlobalBundleAdjustmentNiceness = 10;
 
@@ -221,6 +225,16 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     if (kf->parent() != nullptr) add_edge(kf, kf->parent(), false);
     for (KeyFrame* other : kf->loop_edges()) add_edge(kf, other, false);
     for (KeyFrame* other : kf->CovisiblesWithWeightAtLeast(kMinWeight)) add_edge(kf, other, false);
+  }
+  // Gap links (map/map.h): the only tie between the two sides of a loss once their maps are merged. Without
+  // it the younger map hangs from the one place the merge saw: no cycle closes, and neither side's drift is
+  // corrected.
+  for (const GapLink& link : map_.gap_links()) {
+    const std::optional<GapEdge> edge = ResolveGapLink(link);
+    if (!edge) continue;
+    const auto ia = node.find(edge->before), ib = node.find(edge->after);
+    if (ia == node.end() || ib == node.end()) continue;
+    graph.AddRelativeEdge(ia->second, ib->second, Sim3d(edge->before_from_after), kGapLinkWeight);
   }
   PoseGraphOptions options;
   options.fix_scale = options_.fix_scale;

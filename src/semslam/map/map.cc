@@ -56,6 +56,7 @@ void Map::Clear() {
   keyframe_by_id_.clear();
   points_.clear();
   recent_points.clear();
+  gap_links_.clear();
   ++big_change_index_;
 }
 
@@ -77,6 +78,30 @@ void Map::RestoreSessions(std::vector<MapSession> sessions) {
     Require(sessions[i].id == i, "session ids must be 0, 1, 2, ... in order");
   sessions_ = std::move(sessions);
   current_session_ = static_cast<std::uint32_t>(sessions_.size() - 1);
+}
+
+namespace {
+
+// The good keyframe standing for `kf` (itself, or the nearest good ancestor of a culled one) and
+// ancestor_from_kf.
+std::pair<KeyFrame*, Rigid3d> GoodAncestor(KeyFrame* kf) {
+  Rigid3d ancestor_from_kf;
+  while (kf != nullptr && kf->is_bad()) {
+    ancestor_from_kf = kf->camera_from_parent().Inverse() * ancestor_from_kf;
+    kf = kf->parent();
+  }
+  return {kf, ancestor_from_kf};
+}
+
+}  // namespace
+
+std::optional<GapEdge> ResolveGapLink(const GapLink& link) {
+  const auto [before, before_from_link] = GoodAncestor(link.before);
+  const auto [after, after_from_link] = GoodAncestor(link.after);
+  if (before == nullptr || after == nullptr || before == after) return std::nullopt;
+  const Rigid3d after_from_before =
+      Stretched(link.after_from_before, link.before->scale_correction() / link.before_scale);
+  return GapEdge{before, after, before_from_link * after_from_before.Inverse() * after_from_link.Inverse()};
 }
 
 std::uint32_t Map::StartNewMap() {

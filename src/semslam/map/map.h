@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <shared_mutex>
 #include <string>
@@ -36,6 +37,28 @@ struct MapSession {
   std::string name;    // the sequence's name
   std::string source;  // where its frames came from (the sequence path)
 };
+
+// Where tracking took up again after a loss, as the motion model saw it: the first keyframe of the map
+// started after the loss (`after`), relative to the last keyframe tracked in the lost map (`before`), from
+// the motion before the loss carried over the time without a pose. Nothing in the images ties the two
+// maps there; once they are merged (at a place seen in both), this link keeps the trajectory from folding at
+// the gap (loop closing weighs it as the rough prediction it is).
+struct GapLink {
+  KeyFrame* before = nullptr;
+  KeyFrame* after = nullptr;
+  Rigid3d after_from_before;  // in the lost map's units
+  double before_scale = 1.0;  // before->scale_correction() then (the link stretches with the map there)
+};
+
+// A gap link between the good keyframes standing for its two ends (each end itself, or the nearest good
+// ancestor of a culled one), as before_from_after between them; nullopt when an end has none (its map was
+// given up).
+struct GapEdge {
+  KeyFrame* before = nullptr;
+  KeyFrame* after = nullptr;
+  Rigid3d before_from_after;
+};
+std::optional<GapEdge> ResolveGapLink(const GapLink& link);
 
 class Map {
  public:
@@ -97,6 +120,10 @@ class Map {
   std::uint64_t next_keyframe_id() const { return next_keyframe_id_; }
   std::uint64_t next_point_id() const { return next_point_id_; }
 
+  // Gap links (see GapLink). Add: write lock; read: read lock.
+  void AddGapLink(const GapLink& link) { gap_links_.push_back(link); }
+  const std::vector<GapLink>& gap_links() const { return gap_links_; }
+
   // Incremented on changes that move many poses at once (loop closure, global BA, map merge), so that
   // tracking knows its motion model is stale.
   int big_change_index() const { return big_change_index_; }
@@ -119,6 +146,7 @@ class Map {
   std::uint32_t current_session_ = 0;
   std::uint32_t active_map_id_ = 0;
   std::uint32_t next_map_id_ = 1;
+  std::vector<GapLink> gap_links_;
 };
 
 }  // namespace semslam

@@ -178,8 +178,8 @@ class Tracker {
   void StartNewMap(Frame& frame, TrackingResult& result);
   // A map initialized from `frame` (monocular: with an earlier one); counts the maps started after a loss.
   bool InitializeMap(Frame& frame);
-  // Logs the map started after a loss and the lost map it leaves to be merged.
-  void ReportNewMap(const Frame& frame);
+  // The new map's first keyframe, linked to the lost map where the motion before the loss puts it (GapLink).
+  void LinkNewMapToLostMap(const Frame& frame);
   // Beyond this many steps of the last motion (10 s at 10 Hz) a lost camera's prediction stays where it is.
   static constexpr int kMaxPredictedSteps = 100;
   // The record of a frame without a tracked pose, `frames` after the last tracked one: the motion model's

@@ -53,18 +53,33 @@ bool Tracker::InitializeMap(Frame& frame) {
   const bool ok = options_.monocular ? InitializeMonocular(frame) : InitializeStereo(frame);
   if (ok && lost_map_) {
     ++num_new_maps_;
-    ReportNewMap(frame);
+    LinkNewMapToLostMap(frame);
   }
   return ok;
 }
 
-void Tracker::ReportNewMap(const Frame& frame) {
-  auto lock = map_.ReadLock();
+void Tracker::LinkNewMapToLostMap(const Frame& frame) {
+  auto lock = map_.WriteLock();
+  KeyFrame* after = new_keyframes_.empty() ? nullptr : map_.KeyFrameById(new_keyframes_.front().keyframe_id);
   const FrameRecord& last = lost_map_->last_tracked;
   const KeyFrame* before = CurrentReference(last);
   spdlog::info("frame {}: map {} started; map {} is kept, to be merged when its places are seen again",
                frame.id(), map_.active_map_id(),
                before != nullptr ? before->map_id() : last.reference->map_id());
+  if (after == nullptr || before == nullptr || !lost_map_->velocity || !(lost_map_->step_seconds > 0.0))
+    return;
+  // Where the motion before the loss puts the new map's first keyframe, relative to the last keyframe
+  // tracked.
+  const double seconds = after->timestamp() - last.timestamp;
+  const Rigid3d after_from_before = CarryMotion(
+      *lost_map_->velocity, MotionSteps(last.timestamp, after->timestamp(), lost_map_->step_seconds, 0),
+      kMaxPredictedSteps, *CurrentCameraFromWorld(last) * before->world_from_camera());
+  map_.AddGapLink({map_.KeyFrameById(before->id()), after, after_from_before, before->scale_correction()});
+  spdlog::info(
+      "map {}'s first keyframe (frame {}) is linked to keyframe {} (frame {}) of map {} by the motion before "
+      "the loss over {:.1f} s: {:.2f} apart, turned {:.1f} deg",
+      after->map_id(), after->frame_id(), before->id(), before->frame_id(), before->map_id(), seconds,
+      after_from_before.Inverse().translation.norm(), after_from_before.RotationAngle() * 180.0 / M_PI);
 }
 
 double Tracker::StepsSinceTracked(double timestamp, int frames) const {
