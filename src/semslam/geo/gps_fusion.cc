@@ -34,7 +34,33 @@ struct GraphEdge {
   int a = 0, b = 0;
   Sim3d a_from_b;
   double weight = 1.0;
+  bool carries_scale = true;
 };
+
+// Covisibility between keyframes of one pass: no farther apart along the keyframe chain than twice their
+// distance (a revisit or a loop is much farther along the chain than apart).
+std::vector<bool> WithinOnePass(const std::vector<FramePose>& keyframes,
+                                const std::vector<FusionEdge>& edges) {
+  std::vector<double> along(keyframes.size(), 0.0);
+  for (size_t i = 1; i < keyframes.size(); ++i) {
+    along[i] =
+        along[i - 1] +
+        (keyframes[i].world_from_camera.translation - keyframes[i - 1].world_from_camera.translation).norm();
+  }
+  std::vector<bool> within(edges.size(), false);
+  for (size_t k = 0; k < edges.size(); ++k) {
+    const FusionEdge& e = edges[k];
+    if (e.kind != FusionEdgeKind::kCovisibility) continue;
+    const auto a = static_cast<size_t>(e.a), b = static_cast<size_t>(e.b);
+    const double chord =
+        (keyframes[a].world_from_camera.translation - keyframes[b].world_from_camera.translation).norm();
+    within[k] = std::abs(along[b] - along[a]) <= 2.0 * chord;
+  }
+  return within;
+}
+
+// A log-scale sigma that leaves an edge's scale to the rest of the graph (a factor of e at one sigma).
+constexpr double kUnconstrainedLogScaleSigma = 1.0;
 
 Sim3d Relative(const Rigid3d& world_from_a, const Rigid3d& world_from_b) {
   return Sim3d(world_from_a.Inverse() * world_from_b);
@@ -116,8 +142,11 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
 
   // 3. Edges between keyframes: the caller's, and the chain where the caller gave none.
   std::set<std::pair<int, int>> given;
-  for (const FusionEdge& e : input.edges) {
-    edges.push_back({e.a, e.b, e.a_from_b, e.weight});
+  const std::vector<bool> within_one_pass = WithinOnePass(keyframes, input.edges);
+  for (size_t k = 0; k < input.edges.size(); ++k) {
+    const FusionEdge& e = input.edges[k];
+    const bool carries_scale = options.one_pass_covisibility_carries_scale || !within_one_pass[k];
+    edges.push_back({e.a, e.b, e.a_from_b, e.weight, carries_scale});
     given.insert({std::min(e.a, e.b), std::max(e.a, e.b)});
   }
   if (options.add_chain_edges) {
@@ -163,8 +192,11 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
       const double length = e.a_from_b.translation.norm();
       const double sigma_t = std::max(options.translation_sigma_fraction * length,
                                       options.translation_sigma_floor_m * units_per_metre);
-      const double sigma_s = options.log_scale_sigma_per_sqrt_m *
-                             std::sqrt(std::max(length / units_per_metre, options.translation_sigma_floor_m));
+      const double sigma_s =
+          e.carries_scale
+              ? options.log_scale_sigma_per_sqrt_m *
+                    std::sqrt(std::max(length / units_per_metre, options.translation_sigma_floor_m))
+              : kUnconstrainedLogScaleSigma;
       graph.AddRelativeEdge(
           e.a, e.b, e.a_from_b,
           e.weight * PoseGraph::EdgeInformation(sigma_t, options.rotation_sigma_rad, sigma_s));

@@ -68,6 +68,10 @@ struct GpsFusionOptions {
   Eigen::Vector3d antenna_in_camera_m = Eigen::Vector3d::Zero();
   int max_iterations = 50;
   bool add_chain_edges = true;
+  // Covisibility between keyframes of one pass restates the chain's scale from the same observations:
+  // counted again with every edge, it holds a monocular map's scale drift against its fixes. By default
+  // those edges keep the map's local shape and the chain alone carries its scale.
+  bool one_pass_covisibility_carries_scale = false;
 
   void Check() const;  // throws InvalidArgument
 };

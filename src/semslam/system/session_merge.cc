@@ -61,6 +61,9 @@ nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
   input.enu_from_map = Sim3d();  // the map is in the world already
   GpsFusionOptions options;
   options.alignment.estimate_scale = !stereo;
+  // A merged map's scale is held by all its covisibility: with the scale left to each drive's chain, the
+  // drives' sparse fixes bend it more than they correct it.
+  options.one_pass_covisibility_carries_scale = true;
   options.sampling.time_offset_s = 0.0;  // each drive's fixes are moved into its frames' time below
   bool any = false;
   for (size_t k = 0; k < sessions.size(); ++k) {
