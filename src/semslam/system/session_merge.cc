@@ -61,8 +61,8 @@ nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
   input.enu_from_map = Sim3d();  // the map is in the world already
   GpsFusionOptions options;
   options.alignment.estimate_scale = !stereo;
-  // A merged map's scale is held by all its covisibility: with the scale left to each drive's chain, the
-  // drives' sparse fixes bend it more than they correct it.
+  // Each drive's map bent its scale to its own fixes in its run: the merge's fusion holds the merged map's
+  // scale by all its covisibility and places the drives, rather than bend them to the same fixes again.
   options.one_pass_covisibility_carries_scale = true;
   options.sampling.time_offset_s = 0.0;  // each drive's fixes are moved into its frames' time below
   bool any = false;
