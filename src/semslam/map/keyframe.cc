@@ -288,4 +288,15 @@ std::optional<Eigen::Vector3d> KeyFrame::UnprojectStereo(int index) const {
   return world_from_camera_ * p_cam;
 }
 
+std::pair<KeyFrame*, Rigid3d> GoodAncestor(KeyFrame* kf, Rigid3d x_from_kf, double units) {
+  if (kf == nullptr) return {nullptr, {}};
+  while (kf->is_bad() && kf->parent() != nullptr) {
+    x_from_kf = Stretched(x_from_kf, kf->scale_correction() / units) * kf->camera_from_parent();
+    kf = kf->parent();
+    units = kf->scale_correction();  // camera_from_parent() is in the parent's units as they are now
+  }
+  if (kf->is_bad()) return {nullptr, {}};
+  return {kf, Stretched(x_from_kf, kf->scale_correction() / units)};
+}
+
 }  // namespace semslam

@@ -169,4 +169,10 @@ class KeyFrame {
   double scale_correction_ = 1.0;
 };
 
+// The good keyframe standing for `kf`: itself, or the nearest good ancestor of a culled one (culling hands a
+// keyframe's dependants to its parent through the relative pose it keeps). `x_from_kf`, a pose relative to kf
+// in kf's units when its scale_correction() was `units`, comes back as x_from_ancestor in the ancestor's
+// units now. {nullptr, {}} when no good ancestor is left (its map was given up).
+std::pair<KeyFrame*, Rigid3d> GoodAncestor(KeyFrame* kf, Rigid3d x_from_kf, double units);
+
 }  // namespace semslam

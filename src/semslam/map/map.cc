@@ -80,28 +80,16 @@ void Map::RestoreSessions(std::vector<MapSession> sessions) {
   current_session_ = static_cast<std::uint32_t>(sessions_.size() - 1);
 }
 
-namespace {
-
-// The good keyframe standing for `kf` (itself, or the nearest good ancestor of a culled one) and
-// ancestor_from_kf.
-std::pair<KeyFrame*, Rigid3d> GoodAncestor(KeyFrame* kf) {
-  Rigid3d ancestor_from_kf;
-  while (kf != nullptr && kf->is_bad()) {
-    ancestor_from_kf = kf->camera_from_parent().Inverse() * ancestor_from_kf;
-    kf = kf->parent();
-  }
-  return {kf, ancestor_from_kf};
-}
-
-}  // namespace
-
 std::optional<GapEdge> ResolveGapLink(const GapLink& link) {
-  const auto [before, before_from_link] = GoodAncestor(link.before);
-  const auto [after, after_from_link] = GoodAncestor(link.after);
+  const auto [before, before_from_stand_in] =
+      GoodAncestor(link.before, Rigid3d(), link.before->scale_correction());
+  const auto [after, after_from_stand_in] =
+      GoodAncestor(link.after, Rigid3d(), link.after->scale_correction());
   if (before == nullptr || after == nullptr || before == after) return std::nullopt;
   const Rigid3d after_from_before =
       Stretched(link.after_from_before, link.before->scale_correction() / link.before_scale);
-  return GapEdge{before, after, before_from_link * after_from_before.Inverse() * after_from_link.Inverse()};
+  return GapEdge{before, after,
+                 before_from_stand_in.Inverse() * after_from_before.Inverse() * after_from_stand_in};
 }
 
 std::uint32_t Map::StartNewMap() {

@@ -162,20 +162,9 @@ std::shared_ptr<const FrameData> Tracker::ExtractFeatures(const cv::Mat& left, c
 
 namespace {
 
-// The good keyframe a record hangs from, and the frame's pose relative to it: a culled reference keyframe
-// hands its frames to its parent through the stored relative pose.
+// The good keyframe a record hangs from, and the frame's pose relative to it.
 std::pair<const KeyFrame*, Rigid3d> ResolveReference(const FrameRecord& record) {
-  const KeyFrame* kf = record.reference;
-  if (kf == nullptr) return {nullptr, {}};
-  Rigid3d camera_from_kf = record.camera_from_reference;
-  double units = record.reference_scale;  // of camera_from_kf, in kf's scale_correction()
-  while (kf->is_bad() && kf->parent() != nullptr) {
-    camera_from_kf = Stretched(camera_from_kf, kf->scale_correction() / units) * kf->camera_from_parent();
-    kf = kf->parent();
-    units = kf->scale_correction();  // camera_from_parent() is in the parent's units as they are now
-  }
-  if (kf->is_bad()) return {nullptr, {}};
-  return {kf, Stretched(camera_from_kf, kf->scale_correction() / units)};
+  return GoodAncestor(record.reference, record.camera_from_reference, record.reference_scale);
 }
 
 }  // namespace
