@@ -291,6 +291,43 @@ TEST(BundleAdjust, APointAtACameraCentreIsAnOutlierAndTheRestIsAdjusted) {
   EXPECT_LT(MaxPoseError(s), 1e-4);
 }
 
+// Two stereo cameras 10 m apart that share no point: only the pose prior says where the second lies. Its
+// points start consistent with a wrong pose, so the observations alone keep it there.
+TEST(BundleAdjust, APosePriorPlacesAPoseTheObservationsLeaveFree) {
+  std::mt19937 rng(5);
+  BundleAdjustmentProblem p;
+  p.camera = KittiCamera();
+  p.baseline = 0.54;
+  const Rigid3d true_second =
+      Rigid3d(QuaternionExp(Eigen::Vector3d(0, 0.2, 0)), Eigen::Vector3d(1, 0, 10)).Inverse();
+  p.camera_from_world = {Rigid3d(), Perturbation(rng, 0.05, 1.0) * true_second};
+  p.pose_fixed = {true, false};
+  std::uniform_real_distribution<double> x(-8, 8), y(-2, 2), z(6, 30);
+  for (int pose = 0; pose < 2; ++pose) {
+    for (int k = 0; k < 30; ++k) {
+      const Eigen::Vector3d in_camera(x(rng), y(rng), z(rng));
+      BundleAdjustmentObservation o;
+      o.pose = pose;
+      o.point = static_cast<int>(p.points.size());
+      o.pixel = p.camera.Project(in_camera);
+      o.right_u = o.pixel.x() - p.camera.fx * p.baseline / in_camera.z();
+      p.observations.push_back(o);
+      p.points.push_back(p.camera_from_world[static_cast<size_t>(pose)].Inverse() * in_camera);
+    }
+  }
+  BundleAdjustmentOptions options;
+  options.iterations = 50;
+  BundleAdjustmentProblem without = p;
+  BundleAdjust(without, options);
+  EXPECT_GT((without.camera_from_world[1].translation - true_second.translation).norm(), 0.5);
+
+  p.pose_priors.push_back({0, 1, true_second.Inverse(), 0.05, 0.01});
+  const BundleAdjustmentResult r = BundleAdjust(p, options);
+  EXPECT_LT((p.camera_from_world[1].translation - true_second.translation).norm(), 1e-6);
+  EXPECT_LT(RotationError(p.camera_from_world[1].rotation, true_second.rotation), 1e-6);
+  EXPECT_LT(r.final_rms, 1e-6);  // its points went with it
+}
+
 TEST(BundleAdjust, RejectsBadInput) {
   const Scene s = MakeScene(3, 30, 1, false, 0.0, 0.0, 9);
   BundleAdjustmentProblem p = s.problem;
@@ -305,6 +342,14 @@ TEST(BundleAdjust, RejectsBadInput) {
   p = s.problem;
   p.observations[0].right_u = 10.0;
   EXPECT_THROW(BundleAdjust(p), InvalidArgument);
+  for (const BundleAdjustmentPosePrior& prior : {BundleAdjustmentPosePrior{1, 1, Rigid3d(), 1.0, 1.0},
+                                                 BundleAdjustmentPosePrior{0, 3, Rigid3d(), 1.0, 1.0},
+                                                 BundleAdjustmentPosePrior{0, 1, Rigid3d(), 0.0, 1.0},
+                                                 BundleAdjustmentPosePrior{0, 1, Rigid3d(), 1.0, -1}}) {
+    p = s.problem;
+    p.pose_priors.push_back(prior);
+    EXPECT_THROW(BundleAdjust(p), InvalidArgument);
+  }
   BundleAdjustmentOptions options;
   options.iterations = 0;
   p = s.problem;

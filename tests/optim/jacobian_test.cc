@@ -119,6 +119,19 @@ TEST(OptimJacobians, Reprojection) {
   }
 }
 
+TEST(OptimJacobians, PosePrior) {
+  std::mt19937 rng(4);
+  const optim_internal::RigidLeftManifold manifold;
+  for (int trial = 0; trial < 5; ++trial) {
+    const Rigid3d a(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
+    const Rigid3d b(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
+    const Rigid3d measured =
+        Rigid3d(QuaternionExp(RandomVector(rng, 0.1)), RandomVector(rng, 0.3)) * a * b.Inverse();
+    std::unique_ptr<ceres::CostFunction> cost(optim_internal::NewPosePriorCost(measured, 0.2, 0.05));
+    ExpectJacobiansMatch(*cost, {Packed(a), Packed(b)}, {&manifold, &manifold});
+  }
+}
+
 TEST(OptimJacobians, SelfCalibratingReprojection) {
   std::mt19937 rng(3);
   const PinholeCamera camera = KittiCamera();

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <unordered_map>
 
 #include "semslam/core/error.h"
@@ -28,6 +29,39 @@ constexpr double kGapLinkWeight = 0.1;
 
 // How much lower than the pipeline's other threads the global BA runs.
 constexpr int kGlobalBundleAdjustmentNiceness = 10;
+
+// A gap link's scale is read off the map's speed beside each end, over this many keyframes of the drive.
+constexpr int kSpeedKeyframes = 5;
+
+// Map units per second along the drive beside `kf`: the path through up to kSpeedKeyframes keyframes of its
+// session just before it (or after it, `later`) in time, over their time; nullopt where the drive stood
+// still or has no keyframe there.
+std::optional<double> MapSpeedBeside(const std::vector<KeyFrame*>& keyframes, const KeyFrame* kf,
+                                     bool later) {
+  std::vector<const KeyFrame*> side;
+  for (const KeyFrame* other : keyframes) {
+    if (other->is_bad() || other->session() != kf->session()) continue;
+    if (later ? other->timestamp() > kf->timestamp() : other->timestamp() < kf->timestamp())
+      side.push_back(other);
+  }
+  const auto nearer = [kf](const KeyFrame* a, const KeyFrame* b) {
+    return std::abs(a->timestamp() - kf->timestamp()) < std::abs(b->timestamp() - kf->timestamp());
+  };
+  if (side.size() > kSpeedKeyframes) {
+    std::nth_element(side.begin(), side.begin() + kSpeedKeyframes, side.end(), nearer);
+    side.resize(kSpeedKeyframes);
+  }
+  std::sort(side.begin(), side.end(), nearer);
+  double path = 0.0;
+  const KeyFrame* previous = kf;
+  for (const KeyFrame* next : side) {
+    path += (next->world_from_camera().translation - previous->world_from_camera().translation).norm();
+    previous = next;
+  }
+  const double seconds = std::abs(previous->timestamp() - kf->timestamp());
+  if (!(seconds > 0.0) || !(path > 0.0)) return std::nullopt;
+  return path / seconds;
+}
 
 }  // namespace
 
@@ -228,13 +262,23 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
   }
   // Gap links (map/map.h): the only tie between the two sides of a loss once their maps are merged. Without
   // it the younger map hangs from the one place the merge saw: no cycle closes, and neither side's drift is
-  // corrected.
+  // corrected. A monocular link carries the scale between its sides too: the car's speed does not jump
+  // over the gap, so where the map's speed does, the younger map's units differ there (a merge scales it
+  // as it fits at the place that merged it, which may lie far along the drive).
   for (const GapLink& link : map_.gap_links()) {
     const std::optional<GapEdge> edge = ResolveGapLink(link);
     if (!edge) continue;
     const auto ia = node.find(edge->before), ib = node.find(edge->after);
     if (ia == node.end() || ib == node.end()) continue;
-    graph.AddRelativeEdge(ia->second, ib->second, Sim3d(edge->before_from_after), kGapLinkWeight);
+    Sim3d before_from_after(edge->before_from_after);
+    if (!options_.fix_scale) {
+      const std::optional<double> speed_before = MapSpeedBeside(keyframes, edge->before, false);
+      const std::optional<double> speed_after = MapSpeedBeside(keyframes, edge->after, true);
+      if (speed_before && speed_after) before_from_after.scale = *speed_before / *speed_after;
+    }
+    spdlog::info("gap link keyframe {} -> {}: a map unit after the gap is {:.3f} before it",
+                 edge->before->id(), edge->after->id(), before_from_after.scale);
+    graph.AddRelativeEdge(ia->second, ib->second, before_from_after, kGapLinkWeight);
   }
   PoseGraphOptions options;
   options.fix_scale = options_.fix_scale;

@@ -42,7 +42,8 @@ struct MapSession {
 // started after the loss (`after`), relative to the last keyframe tracked in the lost map (`before`), from
 // the motion before the loss carried over the time without a pose. Nothing in the images ties the two
 // maps there; once they are merged (at a place seen in both), this link keeps the trajectory from folding at
-// the gap (loop closing weighs it as the rough prediction it is).
+// the gap (loop closing weighs it as the rough prediction it is), and bundle adjustments hold its ends where
+// the loop correction put them (mapping/gap_link_priors.h).
 struct GapLink {
   KeyFrame* before = nullptr;
   KeyFrame* after = nullptr;

@@ -15,6 +15,7 @@
 #include "semslam/core/timing.h"
 #include "semslam/geometry/sim3_solver.h"
 #include "semslam/map/keyframe_matches.h"
+#include "semslam/mapping/gap_link_priors.h"
 #include "semslam/optim/sim3_optimization.h"
 
 namespace semslam {
@@ -133,7 +134,7 @@ struct WindowProblem {
 
 // Gathers the points from the window's keyframes, so that the cost of a window follows its size, not the
 // map's.
-WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
+WindowProblem BuildWindowProblem(const Map& map, const std::vector<KeyFrame*>& window,
                                  const std::unordered_set<const KeyFrame*>& in_map,
                                  const GlobalBundleAdjustmentResult& earlier) {
   WindowProblem built;
@@ -157,6 +158,7 @@ WindowProblem BuildWindowProblem(const std::vector<KeyFrame*>& window,
   const std::vector<KeyFrame*> fixed_keyframes(fixed.begin(), fixed.end());
   BuildBundleAdjustmentProblem(built.keyframes, fixed_keyframes, built.points, &built.problem, &built.refs);
   built.keyframes.insert(built.keyframes.end(), fixed_keyframes.begin(), fixed_keyframes.end());
+  AddGapLinkPriors(map, &built.keyframes, &built.problem);
   for (size_t i = 0; i < built.keyframes.size(); ++i) {
     const auto it = earlier.camera_from_world.find(built.keyframes[i]);
     if (it != earlier.camera_from_world.end()) built.problem.camera_from_world[i] = it->second;
@@ -217,7 +219,7 @@ GlobalBundleAdjustmentResult AdjustMapInWindows(const Map& map, std::uint32_t ma
     {
       std::shared_lock<std::shared_mutex> lock;
       if (lock_map) lock = map.ReadLock();
-      built = BuildWindowProblem(window, in_map, result);
+      built = BuildWindowProblem(map, window, in_map, result);
     }
     ++result.windows;
     if (built.problem.observations.empty()) continue;  // its keyframes were culled meanwhile
@@ -370,7 +372,8 @@ int WriteGlobalBundleAdjustment(Map& map, const GlobalBundleAdjustmentResult& re
 
 namespace {
 
-WindowProblem BuildSpreadProblem(const std::vector<KeyFrame*>& keyframes, size_t max_keyframes);
+WindowProblem BuildSpreadProblem(const Map& map, const std::vector<KeyFrame*>& keyframes,
+                                 size_t max_keyframes);
 
 // A solved spread problem as a result to write: every keyframe of it (the fixed ones where they are), its
 // points and outliers; the keyframes between follow them (WriteGlobalBundleAdjustment).
@@ -394,7 +397,7 @@ void GlobalBundleAdjustment(Map& map, std::uint32_t map_id, const GlobalBundleAd
   if (keyframes.size() > static_cast<size_t>(options.window_keyframes)) {
     // Windows hold the keyframes around them still, which keeps a map's large-scale shape as it is: that
     // shape comes from a spread of the map's keyframes first, which the others follow.
-    WindowProblem spread = BuildSpreadProblem(keyframes, static_cast<size_t>(options.window_keyframes));
+    WindowProblem spread = BuildSpreadProblem(map, keyframes, static_cast<size_t>(options.window_keyframes));
     if (!spread.problem.observations.empty()) {
       const BundleAdjustmentResult solved = BundleAdjust(spread.problem, SolverOptions(options));
       WriteGlobalBundleAdjustment(map, SpreadResult(map_id, spread, solved, options.drop_outliers),
@@ -450,13 +453,16 @@ std::string RefusalReason(const PinholeCamera& nominal, const PinholeCamera& ref
 
 // Every k-th keyframe of a map too large for one window (its origin among them), fewer than `max_keyframes`,
 // and the points two of them or more observe: the whole map's geometry, and its loops, at the cost of one
-// window.
-WindowProblem BuildSpreadProblem(const std::vector<KeyFrame*>& keyframes, size_t max_keyframes) {
+// window. The ends of gap links are among them, held as the map has them relative to each other.
+WindowProblem BuildSpreadProblem(const Map& map, const std::vector<KeyFrame*>& keyframes,
+                                 size_t max_keyframes) {
   const size_t step = (keyframes.size() + max_keyframes - 1) / max_keyframes;
+  const std::unordered_set<const KeyFrame*> link_ends = GapLinkEnds(map);
   WindowProblem built;
   for (size_t i = 0; i < keyframes.size(); ++i) {
     KeyFrame* kf = keyframes[i];
-    if (!kf->is_bad() && (i % step == 0 || kf->is_map_origin())) built.keyframes.push_back(kf);
+    if (!kf->is_bad() && (i % step == 0 || kf->is_map_origin() || link_ends.count(kf)))
+      built.keyframes.push_back(kf);
   }
   std::map<MapPoint*, int, ById> seen;  // by id: the same problem on every run
   for (KeyFrame* kf : built.keyframes) {
@@ -468,6 +474,7 @@ WindowProblem BuildSpreadProblem(const std::vector<KeyFrame*>& keyframes, size_t
     if (n >= 2) built.points.push_back(p);
   }
   BuildBundleAdjustmentProblem(built.keyframes, {}, built.points, &built.problem, &built.refs);
+  AddGapLinkPriors(map, &built.keyframes, &built.problem);
   return built;
 }
 
@@ -488,7 +495,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     // The camera is the whole map's: it is told from a spread of keyframes that fits one window (which also
     // gives the map its large-scale shape, as in GlobalBundleAdjustment), and the map, adjusted in windows
     // after, takes it.
-    WindowProblem spread = BuildSpreadProblem(keyframes, static_cast<size_t>(options.window_keyframes));
+    WindowProblem spread = BuildSpreadProblem(map, keyframes, static_cast<size_t>(options.window_keyframes));
     BundleAdjustmentOptions solver = SolverOptions(options);
     const bool stereo = std::any_of(spread.problem.observations.begin(), spread.problem.observations.end(),
                                     [](const BundleAdjustmentObservation& o) { return o.right_u >= 0; });
@@ -527,7 +534,7 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
     return refinement;
   }
   // The plain BA first: the map keeps its result unless the refinement earns its five parameters.
-  WindowProblem whole = BuildWindowProblem(keyframes, {}, {});
+  WindowProblem whole = BuildWindowProblem(map, keyframes, {}, {});
   BundleAdjustmentProblem& problem = whole.problem;
   BundleAdjustmentOptions solver = SolverOptions(options);
   // The keyframes follow the stretch of each solution the map takes (the problem holds it after the solve).

@@ -198,6 +198,73 @@ class AbortCallback final : public ceres::IterationCallback {
   std::atomic<bool>* abort_;
 };
 
+// BundleAdjustmentPosePrior's residual from camera_from_world of a and b (quaternion, translation).
+template <typename T>
+void PosePriorResidual(const Eigen::Quaternion<T>& qa, const Eigen::Matrix<T, 3, 1>& ta,
+                       const Eigen::Quaternion<T>& qb, const Eigen::Matrix<T, 3, 1>& tb,
+                       const BundleAdjustmentPosePrior& prior, T* residual) {
+  // a_from_b = a_from_world * world_from_b; error = measured^-1 * estimate.
+  const Eigen::Quaternion<T> q_ab = qa * qb.conjugate();
+  const Eigen::Matrix<T, 3, 1> t_ab = ta - q_ab * tb;
+  const Eigen::Quaternion<T> measured_inverse = prior.a_from_b.rotation.conjugate().template cast<T>();
+  Eigen::Quaternion<T> q_err = measured_inverse * q_ab;
+  if (q_err.w() < T(0)) q_err.coeffs() = -q_err.coeffs();
+  const Eigen::Matrix<T, 3, 1> t_err =
+      measured_inverse * (t_ab - prior.a_from_b.translation.template cast<T>());
+  for (int i = 0; i < 3; ++i) {
+    residual[i] = t_err[i] / prior.sigma_translation;
+    residual[3 + i] = T(2.0) * q_err.vec()[i] / prior.sigma_rotation;
+  }
+}
+
+// The prior as a cost on two poses [q, t] in RigidLeftManifold's lifted tangent space: the Jacobians by
+// dual numbers over the perturbations [rho, phi] of both poses at zero, where Exp(phi) ~ (1, phi / 2) is
+// exact to first order.
+class PosePriorCost final : public ceres::SizedCostFunction<6, kRigidSize, kRigidSize> {
+ public:
+  explicit PosePriorCost(const BundleAdjustmentPosePrior& prior) : prior_(prior) {}
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Eigen::Map<const Eigen::Quaterniond> qa(parameters[0]), qb(parameters[1]);
+    const Eigen::Map<const Eigen::Vector3d> ta(parameters[0] + 4), tb(parameters[1] + 4);
+    if (jacobians == nullptr || (jacobians[0] == nullptr && jacobians[1] == nullptr)) {
+      PosePriorResidual<double>(qa, ta, qb, tb, prior_, residuals);
+      return true;
+    }
+    using Jet = ceres::Jet<double, 12>;
+    auto perturbed = [](const Eigen::Quaterniond& q, const Eigen::Vector3d& t, int first,
+                        Eigen::Quaternion<Jet>* q_out, Eigen::Matrix<Jet, 3, 1>* t_out) {
+      Eigen::Matrix<Jet, 3, 1> rho, half_phi;
+      for (int i = 0; i < 3; ++i) {
+        rho[i] = Jet(0.0, first + i);
+        half_phi[i] = Jet(0.0, first + 3 + i) * 0.5;
+      }
+      const Eigen::Quaternion<Jet> dq(Jet(1.0), half_phi.x(), half_phi.y(), half_phi.z());
+      *q_out = dq * q.cast<Jet>();
+      *t_out = dq * t.cast<Jet>() + rho;
+    };
+    Eigen::Quaternion<Jet> qa_jet, qb_jet;
+    Eigen::Matrix<Jet, 3, 1> ta_jet, tb_jet;
+    perturbed(qa, ta, 0, &qa_jet, &ta_jet);
+    perturbed(qb, tb, 6, &qb_jet, &tb_jet);
+    Jet r[6];
+    PosePriorResidual<Jet>(qa_jet, ta_jet, qb_jet, tb_jet, prior_, r);
+    for (int row = 0; row < 6; ++row) {
+      residuals[row] = r[row].a;
+      for (int pose = 0; pose < 2; ++pose) {
+        if (jacobians[pose] == nullptr) continue;
+        double* j = jacobians[pose] + row * kRigidSize;
+        for (int k = 0; k < 6; ++k) j[k] = r[row].v[6 * pose + k];
+        j[6] = 0.0;
+      }
+    }
+    return true;
+  }
+
+ private:
+  BundleAdjustmentPosePrior prior_;
+};
+
 void Validate(const BundleAdjustmentProblem& problem) {
   if (!problem.observations.empty()) optim_internal::RequirePinhole(problem.camera, "bundle adjustment");
   Require(std::isfinite(problem.baseline) && problem.baseline >= 0,
@@ -231,6 +298,18 @@ void Validate(const BundleAdjustmentProblem& problem) {
       throw InvalidArgument(which + " is stereo (right_u >= 0) but the baseline is not positive");
     }
   }
+  for (size_t i = 0; i < problem.pose_priors.size(); ++i) {
+    const BundleAdjustmentPosePrior& prior = problem.pose_priors[i];
+    const std::string which = "bundle adjustment: pose prior " + std::to_string(i);
+    if (prior.a < 0 || prior.a >= num_poses || prior.b < 0 || prior.b >= num_poses || prior.a == prior.b) {
+      throw InvalidArgument(which + " must tie two different poses of the problem");
+    }
+    if (!prior.a_from_b.translation.allFinite() || !prior.a_from_b.rotation.coeffs().allFinite() ||
+        !std::isfinite(prior.sigma_translation) || !(prior.sigma_translation > 0) ||
+        !std::isfinite(prior.sigma_rotation) || !(prior.sigma_rotation > 0)) {
+      throw InvalidArgument(which + " has a non-finite value or a sigma <= 0");
+    }
+  }
 }
 
 ceres::LinearSolverType LinearSolver(BundleAdjustmentSolver solver, int num_free_poses) {
@@ -256,6 +335,11 @@ double Chi2Threshold(const BundleAdjustmentObservation& o, const BundleAdjustmen
 ceres::CostFunction* optim_internal::NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel,
                                                                         double aspect, double sqrt_info) {
   return new SelfCalibratingReprojectionCost(pixel, aspect, sqrt_info);
+}
+
+ceres::CostFunction* optim_internal::NewPosePriorCost(const Rigid3d& a_from_b, double sigma_translation,
+                                                      double sigma_rotation) {
+  return new PosePriorCost({0, 1, a_from_b, sigma_translation, sigma_rotation});
 }
 
 ceres::CostFunction* optim_internal::NewReprojectionCost(const PinholeCamera& camera, double bf,
@@ -355,6 +439,19 @@ BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
       residual_ids[i] = ceres_problem.AddResidualBlock(
           new ReprojectionCost<2>(k, o.pixel, o.right_u, sqrt_info), &loss_mono, pose, point);
     }
+  }
+
+  for (const BundleAdjustmentPosePrior& prior : problem.pose_priors) {
+    for (const int i : {prior.a, prior.b}) {
+      const auto pi = static_cast<size_t>(i);
+      if (pose_used[pi]) continue;
+      ceres_problem.AddParameterBlock(&poses[pi * kRigidSize], kRigidSize, &manifold);
+      if (problem.pose_fixed[pi]) ceres_problem.SetParameterBlockConstant(&poses[pi * kRigidSize]);
+      pose_used[pi] = 1;
+    }
+    ceres_problem.AddResidualBlock(new PosePriorCost(prior), nullptr,
+                                   &poses[static_cast<size_t>(prior.a) * kRigidSize],
+                                   &poses[static_cast<size_t>(prior.b) * kRigidSize]);
   }
 
   if (options.refine_intrinsics) {

@@ -22,6 +22,18 @@ struct BundleAdjustmentObservation {
   double inv_sigma2 = 1.0;                          // 1 / sigma^2 of the keypoint's pyramid level (> 0)
 };
 
+// A soft prior on the relative pose of two of the problem's poses: it holds parts of a map that share no
+// points where they are relative to each other (the two sides of a gap in tracking, map/map.h's GapLink),
+// which the observations alone leave free. Residual: [translation (in the problem's units); rotation vector]
+// of a_from_b^-1 * camera_from_world[a] * camera_from_world[b]^-1, each part over its sigma.
+struct BundleAdjustmentPosePrior {
+  int a = -1;  // indices into BundleAdjustmentProblem::camera_from_world
+  int b = -1;
+  Rigid3d a_from_b;
+  double sigma_translation = 1.0;
+  double sigma_rotation = 1.0;  // rad
+};
+
 // In and out: BundleAdjust() writes the optimized poses and points back into the problem.
 struct BundleAdjustmentProblem {
   PinholeCamera camera;   // ideal pinhole shared by all keyframes
@@ -30,6 +42,7 @@ struct BundleAdjustmentProblem {
   std::vector<bool> pose_fixed;         // one per pose
   std::vector<Eigen::Vector3d> points;  // world frame
   std::vector<BundleAdjustmentObservation> observations;
+  std::vector<BundleAdjustmentPosePrior> pose_priors;
 };
 
 enum class BundleAdjustmentSolver {
@@ -79,7 +92,8 @@ struct BundleAdjustmentResult {
 
 // Optimizes the free poses and every observed point in place. Throws InvalidArgument on a bad problem
 // (sizes, indices, non-finite values, inv_sigma2 <= 0, a stereo observation without a baseline, a distorted
-// camera). Points observed by no observation are left alone.
+// camera, a pose prior between one pose or with a sigma <= 0). Points observed by no observation are left
+// alone.
 BundleAdjustmentResult BundleAdjust(BundleAdjustmentProblem& problem,
                                     const BundleAdjustmentOptions& options = {});
 

@@ -21,6 +21,11 @@ ceres::CostFunction* NewReprojectionCost(const PinholeCamera& camera, double bf,
 ceres::CostFunction* NewSelfCalibratingReprojectionCost(const Eigen::Vector2d& pixel, double aspect,
                                                         double sqrt_info);
 
+// Bundle adjustment's pose prior (BundleAdjustmentPosePrior): parameters camera_from_world of a and b
+// (RigidLeftManifold).
+ceres::CostFunction* NewPosePriorCost(const Rigid3d& a_from_b, double sigma_translation,
+                                      double sigma_rotation);
+
 // Pose graph: parameters world_from_a, world_from_b (Sim3RightManifold); the residual is multiplied by
 // sqrt_information.
 ceres::CostFunction* NewRelativeSim3Cost(const Sim3d& a_from_b,
