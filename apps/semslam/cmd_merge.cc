@@ -21,7 +21,6 @@ struct MergeArgs {
   std::string vocabulary;
   bool no_place_recognition = false;
   bool no_drive_loops = false;
-  bool no_weld = false;
   bool no_global_ba = false;
   bool no_gps_fusion = false;
   int global_ba_window = 1000;
@@ -36,7 +35,6 @@ void Run(const MergeArgs& args) {
   options.vocabulary = args.vocabulary;
   options.place_recognition = !args.no_place_recognition;
   options.loops_between_drives = !args.no_drive_loops;
-  options.weld_sessions = !args.no_weld;
   options.global_ba = !args.no_global_ba;
   options.gps_fusion = !args.no_gps_fusion;
   options.global_ba_window_keyframes = args.global_ba_window;
@@ -67,10 +65,6 @@ void AddMergeCommand(CLI::App& app) {
                 "Join maps by their GPS placement only (no search for shared places)");
   cmd->add_flag("--no-drive-loops", args->no_drive_loops,
                 "Tie drives of a merged map only where a merge joined them (no loops between drives)");
-  cmd->add_flag(
-      "--no-weld", args->no_weld,
-      "Stereo maps: do not fuse the points of drives along the streets they share (only where places joined "
-      "them)");
   cmd->add_flag("--no-global-ba", args->no_global_ba, "Skip the final bundle adjustment of the merged maps");
   cmd->add_flag("--no-gps-fusion", args->no_gps_fusion,
                 "Keep the merged map where the merges put it (do not fuse it with every drive's GPS log)");

@@ -27,7 +27,6 @@
 #include "semslam/map/map_file.h"
 #include "semslam/map/map_validation.h"
 #include "semslam/mapping/map_georeference.h"
-#include "semslam/mapping/session_welding.h"
 #include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/report/html_report.h"
@@ -275,20 +274,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     if (places.interrupted) status = "interrupted";
   }
 
-  // 4. The drives of each stereo map welded along the streets they share, then the final bundle adjustment.
-  // Between the places that joined them, monocular drives disagree in scale: welded there, they were pulled
-  // out of shape (three towns, four drives each: the city's ATE worse in 5 of 6 merges, 0.088 -> 0.176 m).
-  size_t welded_observations = 0;
-  if (options.weld_sessions && stereo && !places.interrupted) {
-    auto lock = map.WriteLock();
-    for (const std::uint32_t id : map.MapIds()) {
-      const SessionWeldingSummary welded = WeldSessions(map, id);
-      if (welded.keyframes == 0) continue;
-      welded_observations += welded.fused_observations;
-      spdlog::info("map {}: {} keyframes beside another drive's took {} of its points", id, welded.keyframes,
-                   welded.fused_observations);
-    }
-  }
+  // 4. The final bundle adjustment of each map.
   slam.Finish();
 
   // 5. Maps in the world that no place tied: joined by their GPS placement.
@@ -537,7 +523,6 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
                       {"main_map", main_map},
                       {"place_merges", places.merges},
                       {"session_loops", places.session_loops},
-                      {"welded_observations", welded_observations},
                       {"merges_not_confirmed", places.not_confirmed},
                       {"merge_events", merge_events},
                       {"gps_joins", joins},

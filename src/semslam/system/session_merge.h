@@ -38,7 +38,6 @@ struct SessionMergeOptions {
   std::filesystem::path vocabulary;  // empty: the default vocabulary
   bool place_recognition = true;     // false: maps join through their GPS placement only
   bool loops_between_drives = true;  // loops between drives of a merged map (needs place_recognition)
-  bool weld_sessions = true;         // stereo: drives' points fused along the streets they share
   bool global_ba = true;             // the final bundle adjustment of each merged map
   bool gps_fusion = true;            // the merged map fused with every drive's GPS log (its run's --gps)
   int global_ba_iterations = 20;
