@@ -55,7 +55,7 @@ std::optional<double> MapSpeedBeside(const std::vector<KeyFrame*>& keyframes, co
   double path = 0.0;
   const KeyFrame* previous = kf;
   for (const KeyFrame* next : side) {
-    path += (next->world_from_camera().translation - previous->world_from_camera().translation).norm();
+    path += (next->center() - previous->center()).norm();
     previous = next;
   }
   const double seconds = std::abs(previous->timestamp() - kf->timestamp());

@@ -8,8 +8,8 @@ namespace semslam {
 
 namespace {
 
-// The prior's sigmas: the share of the ends' distance, and the angle. Loose against what the pose graph
-// weighed the link at, tight against the freedom it takes away.
+// The prior's sigmas: a share of the ends' distance, and an angle. The observations leave the ends' relative
+// pose free, so any sigma holds it; these let a BA still move it where points do tie the two sides.
 constexpr double kTranslationSigmaShare = 0.05;
 constexpr double kRotationSigmaRad = M_PI / 180.0;
 
