@@ -11,6 +11,7 @@
 
 #include "semslam/core/error.h"
 #include "semslam/core/thread_priority.h"
+#include "semslam/geometry/scale_across_gap.h"
 #include "semslam/loop/loop_closer.h"
 #include "semslam/map/map_matcher.h"
 #include "semslam/mapping/local_mapper.h"
@@ -30,14 +31,13 @@ constexpr double kGapLinkWeight = 0.1;
 // How much lower than the pipeline's other threads the global BA runs.
 constexpr int kGlobalBundleAdjustmentNiceness = 10;
 
-// A gap link's scale is read off the map's speed beside each end, over this many keyframes of the drive.
+// A gap link's scale comes from the drive's speed over this many keyframes on each side of the gap.
 constexpr int kSpeedKeyframes = 5;
 
-// Map units per second along the drive beside `kf`: the path through up to kSpeedKeyframes keyframes of its
-// session just before it (or after it, `later`) in time, over their time; nullopt where the drive stood
-// still or has no keyframe there.
-std::optional<double> MapSpeedBeside(const std::vector<KeyFrame*>& keyframes, const KeyFrame* kf,
-                                     bool later) {
+// The centres of `kf` and of up to kSpeedKeyframes keyframes of its session nearest to it in time, before it
+// (or after it, `later`), in time order.
+std::vector<StampedPosition> DriveBeside(const std::vector<KeyFrame*>& keyframes, const KeyFrame* kf,
+                                         bool later) {
   std::vector<const KeyFrame*> side;
   for (const KeyFrame* other : keyframes) {
     if (other->is_bad() || other->session() != kf->session()) continue;
@@ -51,16 +51,12 @@ std::optional<double> MapSpeedBeside(const std::vector<KeyFrame*>& keyframes, co
     std::nth_element(side.begin(), side.begin() + kSpeedKeyframes, side.end(), nearer);
     side.resize(kSpeedKeyframes);
   }
-  std::sort(side.begin(), side.end(), nearer);
-  double path = 0.0;
-  const KeyFrame* previous = kf;
-  for (const KeyFrame* next : side) {
-    path += (next->center() - previous->center()).norm();
-    previous = next;
-  }
-  const double seconds = std::abs(previous->timestamp() - kf->timestamp());
-  if (!(seconds > 0.0) || !(path > 0.0)) return std::nullopt;
-  return path / seconds;
+  side.push_back(kf);
+  std::sort(side.begin(), side.end(),
+            [](const KeyFrame* a, const KeyFrame* b) { return a->timestamp() < b->timestamp(); });
+  std::vector<StampedPosition> positions;
+  for (const KeyFrame* other : side) positions.push_back({other->timestamp(), other->center()});
+  return positions;
 }
 
 }  // namespace
@@ -262,9 +258,9 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
   }
   // Gap links (map/map.h): the only tie between the two sides of a loss once their maps are merged. Without
   // it the younger map hangs from the one place the merge saw: no cycle closes, and neither side's drift is
-  // corrected. A monocular link carries the scale between its sides too: the car's speed does not jump
-  // over the gap, so where the map's speed does, the younger map's units differ there (a merge scales it
-  // as it fits at the place that merged it, which may lie far along the drive).
+  // corrected. A monocular link carries the scale between its sides too, from the car's speed on both
+  // (geometry/scale_across_gap.h): a merge scales the younger map as it fits at the place that merged it,
+  // which may lie far along the drive, so its units may still differ at the gap.
   for (const GapLink& link : map_.gap_links()) {
     const std::optional<GapEdge> edge = ResolveGapLink(link);
     if (!edge) continue;
@@ -272,9 +268,9 @@ void LoopCloser::OptimizeEssentialGraph(KeyFrame* loop_keyframe, KeyFrame* curre
     if (ia == node.end() || ib == node.end()) continue;
     Sim3d before_from_after(edge->before_from_after);
     if (!options_.fix_scale) {
-      const std::optional<double> speed_before = MapSpeedBeside(keyframes, edge->before, false);
-      const std::optional<double> speed_after = MapSpeedBeside(keyframes, edge->after, true);
-      if (speed_before && speed_after) before_from_after.scale = *speed_before / *speed_after;
+      const std::optional<double> scale = FitScaleAcrossGap(DriveBeside(keyframes, edge->before, false),
+                                                            DriveBeside(keyframes, edge->after, true));
+      if (scale) before_from_after.scale = *scale;
     }
     spdlog::info("gap link keyframe {} -> {}: a map unit after the gap is {:.3f} before it",
                  edge->before->id(), edge->after->id(), before_from_after.scale);
