@@ -8,7 +8,7 @@
 namespace semslam {
 namespace {
 
-// A car on a straight road from rest at t = 0 with `acceleration` (m/s^2) after `speed` (m/s), sampled at
+// A car on a straight road at `speed` (m/s) at t = 0 with a constant `acceleration` (m/s^2), sampled at
 // `times`, its positions divided by `units` (metres per map unit).
 std::vector<StampedPosition> Drive(const std::vector<double>& times, double speed, double acceleration,
                                    double units) {
