@@ -10,14 +10,14 @@ namespace {
 
 // A car on a straight road at `speed` (m/s) at t = 0 with a constant `acceleration` (m/s^2), sampled at
 // `times`, its positions divided by `units` (metres per map unit).
-std::vector<StampedPosition> Drive(const std::vector<double>& times, double speed, double acceleration,
-                                   double units) {
-  std::vector<StampedPosition> positions;
+Trajectory Drive(const std::vector<double>& times, double speed, double acceleration, double units) {
+  Trajectory drive;
   for (const double t : times) {
     const double metres = speed * t + 0.5 * acceleration * t * t;
-    positions.push_back({t, Eigen::Vector3d(metres, 0.2 * metres, 0.0) / units});
+    drive.push_back(
+        {t, Rigid3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(metres, 0.2 * metres, 0.0) / units)});
   }
-  return positions;
+  return drive;
 }
 
 TEST(FitScaleAcrossGap, GivesTheRatioOfUnitsOfACarThatSpeedsUpOverTheGap) {

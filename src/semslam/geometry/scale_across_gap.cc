@@ -13,22 +13,22 @@ struct SpeedSample {
   double speed;      // units per second
 };
 
-std::vector<SpeedSample> StepSpeeds(const std::vector<StampedPosition>& positions) {
+std::vector<SpeedSample> StepSpeeds(const Trajectory& trajectory) {
+  const Points3d centres = Positions(trajectory);
   std::vector<SpeedSample> samples;
-  for (size_t i = 1; i < positions.size(); ++i) {
-    const double seconds = positions[i].timestamp - positions[i - 1].timestamp;
-    Require(seconds >= 0.0, "FitScaleAcrossGap: positions out of time order");
+  for (size_t i = 1; i < trajectory.size(); ++i) {
+    const double seconds = trajectory[i].timestamp - trajectory[i - 1].timestamp;
+    Require(seconds >= 0.0, "FitScaleAcrossGap: poses out of time order");
     if (seconds == 0.0) continue;
-    samples.push_back({0.5 * (positions[i].timestamp + positions[i - 1].timestamp),
-                       (positions[i].position - positions[i - 1].position).norm() / seconds});
+    samples.push_back({0.5 * (trajectory[i].timestamp + trajectory[i - 1].timestamp),
+                       (centres[i] - centres[i - 1]).norm() / seconds});
   }
   return samples;
 }
 
 }  // namespace
 
-std::optional<double> FitScaleAcrossGap(const std::vector<StampedPosition>& before,
-                                        const std::vector<StampedPosition>& after) {
+std::optional<double> FitScaleAcrossGap(const Trajectory& before, const Trajectory& after) {
   const std::vector<SpeedSample> speeds_before = StepSpeeds(before), speeds_after = StepSpeeds(after);
   if (speeds_before.size() < 2 || speeds_after.size() < 2) return std::nullopt;
   const double gap_start = before.back().timestamp, gap_end = after.front().timestamp;
@@ -45,13 +45,11 @@ std::optional<double> FitScaleAcrossGap(const std::vector<StampedPosition>& befo
     design.row(row) << 1.0, sample.timestamp - middle, 0.0;
     observed(row++) = sample.speed;
   }
-  double speed_after_sum = 0.0;
   for (const SpeedSample& sample : speeds_after) {
     design.row(row) << 1.0, sample.timestamp - middle, -sample.speed;
     observed(row++) = 0.0;
-    speed_after_sum += sample.speed;
   }
-  if (!(speed_after_sum > 0.0)) return std::nullopt;
+  // Standing still after the gap leaves the ratio's column zero: rank 2.
   const Eigen::ColPivHouseholderQR<Eigen::MatrixX3d> qr(design);
   if (qr.rank() < 3) return std::nullopt;
   const Eigen::Vector3d solution = qr.solve(observed);

@@ -34,10 +34,9 @@ constexpr int kGlobalBundleAdjustmentNiceness = 10;
 // A gap link's scale comes from the drive's speed over this many keyframes on each side of the gap.
 constexpr int kSpeedKeyframes = 5;
 
-// The centres of `kf` and of up to kSpeedKeyframes keyframes of its session nearest to it in time, before it
+// The poses of `kf` and of up to kSpeedKeyframes keyframes of its session nearest to it in time, before it
 // (or after it, `later`), in time order.
-std::vector<StampedPosition> DriveBeside(const std::vector<KeyFrame*>& keyframes, const KeyFrame* kf,
-                                         bool later) {
+Trajectory DriveBeside(const std::vector<KeyFrame*>& keyframes, const KeyFrame* kf, bool later) {
   std::vector<const KeyFrame*> side;
   for (const KeyFrame* other : keyframes) {
     if (other->is_bad() || other->session() != kf->session()) continue;
@@ -54,9 +53,9 @@ std::vector<StampedPosition> DriveBeside(const std::vector<KeyFrame*>& keyframes
   side.push_back(kf);
   std::sort(side.begin(), side.end(),
             [](const KeyFrame* a, const KeyFrame* b) { return a->timestamp() < b->timestamp(); });
-  std::vector<StampedPosition> positions;
-  for (const KeyFrame* other : side) positions.push_back({other->timestamp(), other->center()});
-  return positions;
+  Trajectory poses;
+  for (const KeyFrame* other : side) poses.push_back({other->timestamp(), other->world_from_camera()});
+  return poses;
 }
 
 }  // namespace
