@@ -1,6 +1,5 @@
 #include "semslam/loop/loop_closer.h"
 
-#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -8,7 +7,6 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
-#include <string>
 #include <unordered_map>
 
 #include "semslam/core/error.h"
@@ -39,8 +37,10 @@ void LoopCloserOptions::Check() const {
   Require(max_depth_ratio > 1.0, "loop closer: max_depth_ratio must be > 1");
   Require(max_refined_depth_ratio > 1.0 && max_refined_depth_ratio <= max_depth_ratio,
           "loop closer: max_refined_depth_ratio must be in (1, max_depth_ratio]");
-  Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0,
-          "loop closer: max_stereo_correction_ratio must be positive and stereo_correction_slack_m >= 0");
+  Require(max_stereo_correction_ratio > 0 && stereo_correction_slack_m >= 0 &&
+              max_mono_correction_ratio > 0 && mono_correction_slack_depths >= 0,
+          "loop closer: max_stereo_correction_ratio and max_mono_correction_ratio must be positive, "
+          "stereo_correction_slack_m and mono_correction_slack_depths >= 0");
   Require(stereo_rotation_slack_deg >= 0 && max_stereo_rotation_deg_per_100m >= 0 &&
               max_mono_loop_rotation_deg > 0 && max_mono_loop_rotation_deg <= 180,
           "loop closer: stereo_rotation_slack_deg and max_stereo_rotation_deg_per_100m must be >= 0, "
@@ -54,11 +54,16 @@ Rigid3d RigidPose(const Sim3d& camera_from_world) {
 LoopCorrectionSize MeasureCorrection(const Rigid3d& before, const Sim3d& after) {
   const Rigid3d corrected = RigidPose(after);
   return {(corrected.Inverse().translation - before.Inverse().translation).norm(),
-          (corrected * before.Inverse()).RotationAngle() * 180.0 / std::numbers::pi};
+          (corrected * before.Inverse()).RotationAngle() * 180.0 / std::numbers::pi, after.scale};
 }
 
 double LoopCloserOptions::MaxStereoCorrectionM(double odometry_m) const {
   return max_stereo_correction_ratio * odometry_m + stereo_correction_slack_m;
+}
+
+double LoopCloserOptions::MaxMonoCorrection(double odometry, double loop_scale, double scene_depth) const {
+  const double scale_drift = std::max(loop_scale, 1.0 / loop_scale) - 1.0;
+  return (max_mono_correction_ratio + scale_drift) * odometry + mono_correction_slack_depths * scene_depth;
 }
 
 double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
@@ -66,9 +71,11 @@ double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
   return stereo_rotation_slack_deg + max_stereo_rotation_deg_per_100m * odometry_m / 100.0;
 }
 
-bool LoopCloserOptions::AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m) const {
+bool LoopCloserOptions::AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m,
+                                         double scene_depth) const {
   if (correction.degrees > MaxRotationDeg(odometry_m)) return false;
-  return !fix_scale || correction.metres <= MaxStereoCorrectionM(odometry_m);
+  if (fix_scale) return correction.metres <= MaxStereoCorrectionM(odometry_m);
+  return correction.metres <= MaxMonoCorrection(odometry_m, correction.scale, scene_depth);
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -395,26 +402,24 @@ bool LoopCloser::AgreesWithStructure(const KeyFrame& current, const KeyFrame& ca
 bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const KeyFrame* candidate) const {
   if (candidate->map_id() != current->map_id()) return true;  // maps to merge share no odometry
   const LoopCorrectionSize correction = MeasureCorrection(current->camera_from_world(), current_from_world_);
-  // The odometry between the two ends (metres in a stereo map): the shortest chain of the links the essential
-  // graph holds, so a revisit tracked in the map, an earlier loop or a merge shortens it. Counting the path
-  // driven instead let a look-alike 24 m away pass at the third visit of a place (900 m driven, 30 m
-  // allowed). A monocular map's bound does not use it.
+  // The odometry between the two ends (metres in a stereo map, its units in a monocular one): the shortest
+  // chain of the links the essential graph holds, so a revisit tracked in the map, an earlier loop or a
+  // merge shortens it. Counting the path driven instead let a look-alike 24 m away pass at the third visit
+  // of a place (900 m driven, 30 m allowed).
   constexpr int kEssentialCovisibility = 100;  // as in OptimizeEssentialGraph
-  const double odometry =
-      options_.fix_scale ? KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility) : 0.0;
-  const bool agrees = options_.AllowsCorrection(correction, odometry);
-  const std::string what =
-      options_.fix_scale
-          ? fmt::format(
-                "{} the keyframe {:.1f} m and {:.1f} deg after {:.1f} m of odometry between them (limits "
-                "{:.1f} m, {:.1f} deg)",
-                agrees ? "moves" : "refused: it would move", correction.metres, correction.degrees, odometry,
-                options_.MaxStereoCorrectionM(odometry), options_.MaxRotationDeg(odometry))
-          : fmt::format("{} the keyframe {:.1f} deg (limit {:.1f} deg)",
-                        agrees ? "turns" : "refused: it would turn", correction.degrees,
-                        options_.MaxRotationDeg(odometry));
-  spdlog::info("loop candidate: keyframe {} with keyframe {} {}{}", current->id(), candidate->id(), what,
-               agrees ? "" : "; a place that only looks the same");
+  const double odometry = KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility);
+  const double scene_depth = current->SceneDepthQuantile(2);
+  const bool agrees = options_.AllowsCorrection(correction, odometry, scene_depth);
+  const double max_move = options_.fix_scale
+                              ? options_.MaxStereoCorrectionM(odometry)
+                              : options_.MaxMonoCorrection(odometry, correction.scale, scene_depth);
+  const char* unit = options_.fix_scale ? " m" : "";
+  spdlog::info(
+      "loop candidate: keyframe {} with keyframe {} {} the keyframe {:.2f}{} and {:.1f} deg "
+      "after {:.2f}{} of odometry between them, its scene {:.2f}{} deep (limits {:.2f}{}, {:.1f} deg){}",
+      current->id(), candidate->id(), agrees ? "moves" : "refused: it would move", correction.metres, unit,
+      correction.degrees, odometry, unit, scene_depth, unit, max_move, unit,
+      options_.MaxRotationDeg(odometry), agrees ? "" : "; a place that only looks the same");
   return agrees;
 }
 

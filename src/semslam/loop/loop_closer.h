@@ -31,10 +31,12 @@ namespace semslam {
 Rigid3d RigidPose(const Sim3d& camera_from_world);
 
 // How far a loop's correction moves and turns a keyframe: from its pose `before` to the corrected
-// camera_from_world `after` (whose scale, for a monocular map, is the map's, not the keyframe's).
+// camera_from_world `after` (whose scale, for a monocular map, is the map's, not the keyframe's), and the
+// scale it gives the keyframe's side of the map (1 for stereo).
 struct LoopCorrectionSize {
   double metres = 0.0;
   double degrees = 0.0;
+  double scale = 1.0;
 };
 LoopCorrectionSize MeasureCorrection(const Rigid3d& before, const Sim3d& after);
 
@@ -73,10 +75,21 @@ struct LoopCloserOptions {
   // (the shortest chain of essential-graph links, see KeyFrameGraphDistance), plus
   // stereo_correction_slack_m. A larger jump means a place that looks the same elsewhere (towns repeat).
   // 3 % is several times what stereo odometry drifts on a busy machine, and keeps out a look-alike block
-  // one street away while the odometry between the two is under a kilometre. A monocular map's scale
-  // drifts too much for such a bound, and maps to merge share no odometry.
+  // one street away while the odometry between the two is under a kilometre. Maps to merge share no
+  // odometry.
   double max_stereo_correction_ratio = 0.03;
   double stereo_correction_slack_m = 3.0;
+  // Monocular: a loop within one map may move the current keyframe by at most this share of the odometry
+  // between the two keyframes (map units) plus the share its own scale explains, max(s, 1/s) - 1 for a loop
+  // of scale s (a scale that drifted to s along the path puts the path's far end off by up to that share of
+  // it), plus mono_correction_slack_depths times the keyframe's median scene depth (a Sim(3)'s error grows
+  // with the depth of the points it comes from; that depth is what a monocular map's unit means). True loops
+  // moved their keyframe 0.1-1 % of the odometry in the towns (scale 0.96-0.99) and 11 % on KITTI 00 (scale
+  // 2.12, bound 115 %); loops between two drives of a merged town, where the odometry between them is little
+  // more than the merge's link, up to 0.21 with the scene about 1 deep. Look-alike blocks 101 m from the
+  // place would have moved it 25 % and 37 % (bounds 7 % and 8 %, 8 % and 10 % with the slack).
+  double max_mono_correction_ratio = 0.03;
+  double mono_correction_slack_depths = 0.25;
   // A loop within one map may turn the current keyframe by at most this much. Odometry's heading drifts by
   // a few degrees where its length may drift by percents (monocular scale); a look-alike seen across a
   // crossing is off by the angle between the streets (a stereo loop at a corner that would have moved the
@@ -98,13 +111,14 @@ struct LoopCloserOptions {
   bool enabled = true;
 
   void Check() const;
-  // The bounds above for a loop whose two ends are odometry_m apart along the map's links (metres; the
-  // monocular rotation bound does not use it).
+  // The bounds above for a loop whose two ends are odometry_m apart along the map's links (metres, or a
+  // monocular map's units; the monocular rotation bound does not use it).
   double MaxStereoCorrectionM(double odometry_m) const;
+  double MaxMonoCorrection(double odometry, double loop_scale, double scene_depth) const;
   double MaxRotationDeg(double odometry_m) const;
-  // Whether a loop within one map of that odometry may make this correction: stereo within both bounds,
-  // monocular within the rotation bound (its odometry's length is not metric).
-  bool AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m) const;
+  // Whether a loop within one map of that odometry may make this correction (within both bounds);
+  // scene_depth, the current keyframe's median scene depth, sets the monocular slack.
+  bool AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m, double scene_depth) const;
 };
 
 struct LoopEvent {

@@ -100,6 +100,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"stereo_correction_slack_m", Bind(&o->loop.stereo_correction_slack_m)},
       {"stereo_rotation_slack_deg", Bind(&o->loop.stereo_rotation_slack_deg)},
       {"max_stereo_rotation_deg_per_100m", Bind(&o->loop.max_stereo_rotation_deg_per_100m)},
+      {"max_mono_correction_ratio", Bind(&o->loop.max_mono_correction_ratio)},
+      {"mono_correction_slack_depths", Bind(&o->loop.mono_correction_slack_depths)},
       {"max_mono_loop_rotation_deg", Bind(&o->loop.max_mono_loop_rotation_deg)},
       {"merge_maps", Bind(&o->loop.merge_maps)},
       {"global_ba", Bind(&o->loop.global_ba)},
