@@ -9,10 +9,10 @@
 //
 // Measured (commit of this test; 2 cores shared with other builds, load 7-10): stereo 97 keyframes, the loop
 // at keyframe 95 with keyframe 11, 420 of 420 segmentations fused, 70 s of CPU per run; mono 110 keyframes,
-// the loop at keyframe 106 with keyframe 13, 420 of 420 fused, 45 s; KITTI 07 12 s. Every pair gave the same
-// bytes. Before synchronous pacing waited for the loop closer and the segmentation worker, a 900-frame stereo
-// town (seed 2718) gave different trajectories in two runs. Cost: the 420-frame town and six runs, about 6
-// minutes of CPU.
+// the loop at keyframe 106 with keyframe 13 (105 with 12 since retrieval ranks by the share of words), 420
+// of 420 fused, 45 s; KITTI 07 12 s. Every pair gave the same bytes. Before synchronous pacing waited for the
+// loop closer and the segmentation worker, a 900-frame stereo town (seed 2718) gave different trajectories in
+// two runs. Cost: the 420-frame town and six runs, about 6 minutes of CPU.
 
 #include <gtest/gtest.h>
 
@@ -76,9 +76,10 @@ TEST_P(SynchronousRuns, ATownWithALoopAndSegmentationGivesTheSameBytesTwice) {
   // What the comparison covered: a loop closed (with its correction and global BA), and every keyframe and
   // tracked frame segmented and fused, none skipped.
   EXPECT_GE(run.value("loops", 0), 1) << run.dump(1);
-  // Accuracy, held within 5 % of the reproducible value (measured: mono 0.0482 m, stereo 0.0692 m over 356 m,
-  // every frame with a pose).
-  const double measured_ate = mode == "mono" ? 0.0482 : 0.0692;
+  // Accuracy, held within 5 % of the reproducible value (measured: mono 0.0507 m, stereo 0.0692 m over 356 m,
+  // every frame with a pose; mono was 0.0482 m before retrieval ranked keyframes by their share of common
+  // words, which closes its loop one keyframe earlier).
+  const double measured_ate = mode == "mono" ? 0.0507 : 0.0692;
   EXPECT_LE(run.value("ate_rmse", 1e9), 1.05 * measured_ate);
   EXPECT_EQ(run.value("with_pose", 0), kTownFrames);
   const nlohmann::json& segmentation = run["segmentation"];

@@ -8,24 +8,28 @@ namespace semslam {
 std::vector<KeyFrame*> FindPlaceCandidates(const BowVector& query, const KeyFrameDatabase& database,
                                            const Map& map, const PlaceCandidateOptions& options) {
   struct Scored {
-    int shared_words = 0;
+    double word_share = 0.0;
     double score = 0.0;
   };
   std::map<KeyFrame*, Scored, ById> found;
-  int max_common = 0;
+  double max_share = 0.0;
   for (const DatabaseResult& r : database.Query(query)) {
     if (options.excluded.count(r.id)) continue;
     KeyFrame* kf = map.KeyFrameById(r.id);
     if (kf == nullptr || kf->is_bad() || (options.map_id && kf->map_id() != *options.map_id) ||
         options.excluded_maps.count(kf->map_id()) || options.excluded_sessions.count(kf->session()))
       continue;
-    found[kf] = {r.shared_words, r.score};
-    max_common = std::max(max_common, r.shared_words);
+    // The share of the keyframe's words, not their number: a keyframe with more words shares more by chance
+    // alone, and a map's first keyframes have twice the features (for its initialization).
+    const double share =
+        static_cast<double>(r.shared_words) / static_cast<double>(std::max<size_t>(kf->bow.size(), 1));
+    found[kf] = {share, r.score};
+    max_share = std::max(max_share, share);
   }
-  const int min_common = static_cast<int>(0.8 * max_common);
+  const double min_share = 0.8 * max_share;
   std::map<KeyFrame*, double, ById> scored;
   for (const auto& [kf, s] : found) {
-    if (s.shared_words > min_common && s.score >= options.min_score) scored[kf] = s.score;
+    if (s.word_share > min_share && s.score >= options.min_score) scored[kf] = s.score;
   }
   // Each keyframe's score accumulated with its scored covisible neighbours; the best keyframe of each group.
   std::vector<std::pair<double, KeyFrame*>> groups;

@@ -1,9 +1,10 @@
 #pragma once
 // Keyframes of the map that look like a query (Galvez-Lopez & Tardos 2012; Mur-Artal et al. 2015, sections
-// V-VI), for relocalization and loop detection alike: the database's keyframes that share at least 80 % of
-// the best number of common words with the query (and score at least `min_score`) are scored; each one's
-// score is accumulated with those of its scored covisible neighbours, and the best-scoring keyframe of every
-// group whose accumulated score is at least 75 % of the best group's is a candidate, best group first.
+// V-VI), for relocalization and loop detection alike: the database's keyframes whose share of their words
+// in common with the query is at least 80 % of the best share (and that score at least `min_score`) are
+// scored; each one's score is accumulated with those of its scored covisible neighbours, and the best-scoring
+// keyframe of every group whose accumulated score is at least 75 % of the best group's is a candidate, best
+// group first.
 
 #include <cstdint>
 #include <optional>
