@@ -66,6 +66,10 @@ double LoopCloserOptions::MaxMonoCorrection(double odometry, double loop_scale, 
   return (max_mono_correction_ratio + scale_drift) * odometry + mono_correction_slack_depths * scene_depth;
 }
 
+double LoopCloserOptions::MaxCorrection(double odometry, double loop_scale, double scene_depth) const {
+  return fix_scale ? MaxStereoCorrectionM(odometry) : MaxMonoCorrection(odometry, loop_scale, scene_depth);
+}
+
 double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
   if (!fix_scale) return max_mono_loop_rotation_deg;
   return stereo_rotation_slack_deg + max_stereo_rotation_deg_per_100m * odometry_m / 100.0;
@@ -73,9 +77,8 @@ double LoopCloserOptions::MaxRotationDeg(double odometry_m) const {
 
 bool LoopCloserOptions::AllowsCorrection(const LoopCorrectionSize& correction, double odometry_m,
                                          double scene_depth) const {
-  if (correction.degrees > MaxRotationDeg(odometry_m)) return false;
-  if (fix_scale) return correction.metres <= MaxStereoCorrectionM(odometry_m);
-  return correction.metres <= MaxMonoCorrection(odometry_m, correction.scale, scene_depth);
+  return correction.degrees <= MaxRotationDeg(odometry_m) &&
+         correction.metres <= MaxCorrection(odometry_m, correction.scale, scene_depth);
 }
 
 LoopCloser::LoopCloser(const LoopCloserOptions& options, Map& map, const Vocabulary& vocabulary,
@@ -410,9 +413,7 @@ bool LoopCloser::CorrectionAgreesWithOdometry(const KeyFrame* current, const Key
   const double odometry = KeyFrameGraphDistance(*candidate, *current, kEssentialCovisibility);
   const double scene_depth = current->SceneDepthQuantile(2);
   const bool agrees = options_.AllowsCorrection(correction, odometry, scene_depth);
-  const double max_move = options_.fix_scale
-                              ? options_.MaxStereoCorrectionM(odometry)
-                              : options_.MaxMonoCorrection(odometry, correction.scale, scene_depth);
+  const double max_move = options_.MaxCorrection(odometry, correction.scale, scene_depth);
   const char* unit = options_.fix_scale ? " m" : "";
   spdlog::info(
       "loop candidate: keyframe {} with keyframe {} {} the keyframe {:.2f}{} and {:.1f} deg "

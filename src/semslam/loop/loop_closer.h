@@ -83,11 +83,8 @@ struct LoopCloserOptions {
   // between the two keyframes (map units) plus the share its own scale explains, max(s, 1/s) - 1 for a loop
   // of scale s (a scale that drifted to s along the path puts the path's far end off by up to that share of
   // it), plus mono_correction_slack_depths times the keyframe's median scene depth (a Sim(3)'s error grows
-  // with the depth of the points it comes from; that depth is what a monocular map's unit means). True loops
-  // moved their keyframe 0.1-1 % of the odometry in the towns (scale 0.96-0.99) and 11 % on KITTI 00 (scale
-  // 2.12, bound 115 %); loops between two drives of a merged town, where the odometry between them is little
-  // more than the merge's link, up to 0.21 with the scene about 1 deep. Look-alike blocks 101 m from the
-  // place would have moved it 25 % and 37 % (bounds 7 % and 8 %, 8 % and 10 % with the slack).
+  // with the depth of the points it comes from, and that depth is what a monocular map's unit means: loops
+  // between two merged drives, joined by little more than the merge's link, move their keyframe by that).
   double max_mono_correction_ratio = 0.03;
   double mono_correction_slack_depths = 0.25;
   // A loop within one map may turn the current keyframe by at most this much. Odometry's heading drifts by
@@ -115,6 +112,8 @@ struct LoopCloserOptions {
   // monocular map's units; the monocular rotation bound does not use it).
   double MaxStereoCorrectionM(double odometry_m) const;
   double MaxMonoCorrection(double odometry, double loop_scale, double scene_depth) const;
+  // The move bound of this map's kind: stereo or monocular (which uses loop_scale and scene_depth).
+  double MaxCorrection(double odometry, double loop_scale, double scene_depth) const;
   double MaxRotationDeg(double odometry_m) const;
   // Whether a loop within one map of that odometry may make this correction (within both bounds);
   // scene_depth, the current keyframe's median scene depth, sets the monocular slack.
