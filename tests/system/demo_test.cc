@@ -26,7 +26,7 @@ TEST(Demo, TheDemosDriveKeepsItsReproducibleAccuracy) {
   EXPECT_EQ(run.value("with_pose", 0), kFrames);
   EXPECT_GE(run.value("loops", 0), 1) << "the demo's drive holds a loop";
   // Measured at synchronous pacing (commit of this test's last change): ATE 0.3495 m over 1087 m, the loop
-  // closed, map labels 91.49 % right (run.json label_accuracy). About 5-7 minutes on 2 cores.
+  // closed, map labels 91.49 % right (run.json label_accuracy). About 7 minutes on 2 cores, alone.
   EXPECT_LE(demo.value("ate_rmse", 1e9), 1.05 * 0.3495);
   EXPECT_GE(demo.value("label_accuracy", 0.0), 0.9149 - 0.01);
   // The second drive is localized at fast pacing (not reproducible): the SPEC's bar.
