@@ -104,24 +104,6 @@ std::string ModeName(const ::testing::TestParamInfo<std::string>& mode) { return
 
 INSTANTIATE_TEST_SUITE_P(Modes, BlackOut, ::testing::Values("mono", "stereo"), ModeName);
 
-// `compose` (a sequence with black frames) into DIR/sequence, then `run` on it into DIR/out, made once as the
-// artifact `name`.
-Artifact ComposedRun(const std::string& name, const std::vector<std::string>& compose,
-                     const std::vector<std::string>& run) {
-  std::vector<std::string> recipe = compose;
-  recipe.insert(recipe.end(), run.begin(), run.end());
-  return SharedArtifact(name, recipe, [&](const fs::path& dir) -> std::string {
-    std::vector<std::string> c = compose;
-    c.insert(c.end(), {"--out", (dir / "sequence").string()});
-    CommandResult r = RunSemslam(c);
-    if (!r.Succeeded()) return r.Describe();
-    std::vector<std::string> full = run;
-    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
-    r = RunSemslam(full);
-    return r.Succeeded() ? "" : r.Describe();
-  });
-}
-
 // Seed 2027's town, black frames 750-769 on a street of repeating fronts. The car drives 19 m in the
 // black-out, and the street a block back looks like the one ahead: found there by bag of words in the lost
 // map, the first frame after the black-out was put about where the camera had been before it, and the drive

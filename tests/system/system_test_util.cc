@@ -156,6 +156,22 @@ Artifact Run(const std::string& name, const Artifact& dataset, const std::vector
 
 Artifact SyntheticDataset() { return SyntheticTown("city200", kSyntheticFrames, 1); }
 
+Artifact ComposedRun(const std::string& name, const std::vector<std::string>& compose,
+                     const std::vector<std::string>& run) {
+  std::vector<std::string> recipe = compose;
+  recipe.insert(recipe.end(), run.begin(), run.end());
+  return SharedArtifact(name, recipe, [&](const fs::path& dir) -> std::string {
+    std::vector<std::string> c = compose;
+    c.insert(c.end(), {"--out", (dir / "sequence").string()});
+    CommandResult r = RunSemslam(c);
+    if (!r.Succeeded()) return r.Describe();
+    std::vector<std::string> full = run;
+    full.insert(full.end(), {"--sequence", (dir / "sequence").string(), "--out", (dir / "out").string()});
+    r = RunSemslam(full);
+    return r.Succeeded() ? "" : r.Describe();
+  });
+}
+
 Artifact TinyDataset() { return SyntheticTown("city6", 6, 1); }
 
 Artifact MonoRun() {

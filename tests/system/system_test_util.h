@@ -77,6 +77,11 @@ Artifact SecondDriveStereoRun();
 // `semslam run --mode stereo --pacing synchronous` over the 6-frame dataset (a small map.semslam).
 Artifact TinyStereoRun();
 
+// `compose` (a sequence cut, blacked out or reversed) into DIR/sequence, then `run` on it into DIR/out, made
+// once as the artifact `name`. `run` names no --sequence or --out.
+Artifact ComposedRun(const std::string& name, const std::vector<std::string>& compose,
+                     const std::vector<std::string>& run);
+
 // The sequence folder of a synthetic dataset.
 inline fs::path SequenceDir(const fs::path& dataset) { return dataset / "sequences" / "00"; }
 

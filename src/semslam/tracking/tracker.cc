@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <utility>
 
 #include "semslam/core/error.h"
 #include "semslam/features/matching.h"
@@ -120,6 +121,7 @@ void Tracker::ForgetTrackingState() {
   last_keyframe_ = reference_keyframe_ = nullptr;
   local_keyframes_.clear();
   local_points_.clear();
+  last_tracked_inliers_ = 0;
 }
 
 void Tracker::Reset() {
@@ -269,6 +271,8 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
   auto lock = map_.ReadLock();
   if (last_frame_) ReplaceMergedPoints(*last_frame_);
   bool ok = false;
+  const bool was_tracking = state_ == TrackingState::kOk;
+  const int last_inliers = std::exchange(last_tracked_inliers_, 0);
   if (state_ == TrackingState::kOk) {
     const bool map_changed = map_.big_change_index() != last_big_change_;
     if (map_changed) {
@@ -304,7 +308,8 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
     frame.ClearMatches();
     return false;
   }
-  result.relocalized = state_ != TrackingState::kOk;  // confirmed by the local map
+  const bool relocalized_after_collapse = was_tracking && RelocalizeAfterCollapse(frame, last_inliers);
+  result.relocalized = !was_tracking || relocalized_after_collapse;  // confirmed by the local map
   if (reference_keyframe_->map_id() != map_.active_map_id()) {
     // Relocalized in another map (of a loaded atlas, or the one lost before the active one started):
     // tracking and mapping go on in that one.
@@ -317,7 +322,8 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
   }
   if (frame.reference_keyframe == nullptr) frame.reference_keyframe = reference_keyframe_;
   tracked_camera_from_reference_ = frame.camera_from_world() * frame.reference_keyframe->world_from_camera();
-  if (last_frame_ && last_frame_->has_pose() && last_frame_->reference_keyframe != nullptr) {
+  if (!relocalized_after_collapse && last_frame_ && last_frame_->has_pose() &&
+      last_frame_->reference_keyframe != nullptr) {
     velocity_ = frame.camera_from_world() * last_frame_->world_from_camera();
   } else if (!result.relocalized || !last_relocalization_recovered_) {
     velocity_.reset();  // a recovered frame keeps the mean motion over the gap (Relocalize)
@@ -327,6 +333,7 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
     CreateNewKeyFrame(frame);
     result.new_keyframe = true;
   }
+  last_tracked_inliers_ = inliers_;
   // Outliers are not carried to the next frame's motion-model search.
   for (size_t i = 0; i < frame.map_points.size(); ++i) {
     if (frame.outliers[i]) frame.map_points[i] = nullptr;

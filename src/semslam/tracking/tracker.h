@@ -173,6 +173,11 @@ class Tracker {
   bool TrackWithMotionModelOrReference(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);
+  // A frame tracked on under half the last frame's inliers may be far from where the motion model put it
+  // (frames dropped or cut from the recording): relocalized by appearance, it takes that pose when the local
+  // map confirms it with more inliers. Call after TrackLocalMap succeeded; true when the frame was
+  // relocalized.
+  bool RelocalizeAfterCollapse(Frame& frame, int last_inliers);
   // Lost for good: a new map is made active (stereo initializes it from `frame` at once); until it starts,
   // frames are relocalized in the lost map first.
   void StartNewMap(Frame& frame, TrackingResult& result);
@@ -239,6 +244,9 @@ class Tracker {
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
   int inliers_ = 0;
+  // The last frame's inliers when TrackInMap tracked it, else 0: a map's first frames count the points the
+  // mapper has made by then, which at synchronous pacing still depends on the machine's load.
+  int last_tracked_inliers_ = 0;
   int num_relocalizations_ = 0;
   int num_new_maps_ = 0;
   bool map_loaded_ = false;
