@@ -273,7 +273,7 @@ bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {
   bool ok = false;
   const bool was_tracking = state_ == TrackingState::kOk;
   const int last_inliers = std::exchange(last_tracked_inliers_, 0);
-  if (state_ == TrackingState::kOk) {
+  if (was_tracking) {
     const bool map_changed = map_.big_change_index() != last_big_change_;
     if (map_changed) {
       last_big_change_ = map_.big_change_index();

@@ -180,6 +180,7 @@ bool Tracker::RelocalizeAfterCollapse(Frame& frame, int last_inliers) {
   Frame candidate = frame;
   candidate.ClearMatches();
   // The tracked pass marked its local map as this frame's; the candidate's must gather and search it anew.
+  // Points the candidate's pass meets are counted as seen (and found) a second time in this frame.
   for (KeyFrame* kf : local_keyframes_) kf->tracking_local_frame = UINT64_MAX;
   for (MapPoint* p : local_points_) p->tracking_local_map_frame = p->tracking_last_seen_frame = UINT64_MAX;
   for (MapPoint* p : frame.map_points) {
