@@ -397,9 +397,11 @@ def synthetic_cases(seeds, frames, blackout_modes, variants=None):
                                      bars=[bar("<=", 0.3, "quiet", source="SPEC")] if mode == "mono" else []),
                 "loops": LOOPS,
                 "with_pose": WITH_POSE,
-                "label_3d_pct": spec("map labels right, 3D (surface)", "%", "higher", digits=1,
-                                     bars=[bar(">=", 93.0, "quiet", source="SPEC")]),
-                "label_3d_global_pct": spec("map labels right, 3D, one alignment", "%", "higher", digits=1),
+                # SPEC's 93 % judges the headline, the user's measure (issue 42): each point against the
+                # surface it lies on where the map puts it in the world.
+                "label_3d_pct": spec("map labels right, 3D, per keyframe", "%", "higher", digits=1),
+                "label_3d_global_pct": spec("map labels right, 3D, one alignment (the headline)", "%", "higher",
+                                            digits=1, bars=[bar(">=", 93.0, "quiet", source="SPEC")]),
                 "label_2d_pct": spec("map labels right, 2D (keypoints)", "%", "higher", digits=1,
                                      bars=[bar(">=", 95.0, "quiet", source="SPEC")]),
                 "landmark_error_median_m": spec("landmark error, median", "m", "lower", digits=2),

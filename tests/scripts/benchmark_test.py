@@ -246,6 +246,19 @@ class Merge(unittest.TestCase):
         self.assertEqual(code, 0)
         self.assertIn("(commit `base`): 2 figure(s) worse", text)
 
+    def test_the_page_is_judged_by_todays_bars(self):
+        run = results({"label_3d_global_pct": figure(better="higher", quiet=[90.0], unit="%"),
+                       "label_3d_pct": figure(better="higher", quiet=[95.0], unit="%",
+                                              bars=[{"op": ">=", "value": 93.0, "on": "quiet"}]),
+                       "retired": figure(quiet=[1.0], bars=[{"op": "<=", "value": 0.5, "on": "quiet"}])})
+        run["cases"] = {"town5153_mono": run["cases"]["case_a"]}
+        benchmark.judge_by_todays_bars(run)
+        figures = run["cases"]["town5153_mono"]["figures"]
+        self.assertFalse(report.check_bar(figures["label_3d_global_pct"]))  # today's bar, the measured value
+        self.assertEqual(figures["label_3d_global_pct"]["quiet"]["median"], 90.0)
+        self.assertIsNone(report.check_bar(figures["label_3d_pct"]))
+        self.assertFalse(report.check_bar(figures["retired"]))  # a figure no case defines keeps its own
+
     def test_two_binaries_or_one_case_twice_are_refused(self):
         a = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (abc)")
         other = results({"ate_m": figure(quiet=[0.1])}, binary_version="semslam 1 (def)")
