@@ -14,9 +14,14 @@ import statistics
 
 VARIANTS = ("synchronous", "quiet", "busy")
 REALTIME_VARIANTS = ("quiet", "busy")
-# Synchronous figures are bit-reproducible: anything beyond this is a change, not noise.
+# Synchronous figures are bit-reproducible: anything beyond this is a change, not noise. Realtime figures are
+# compared with it too: runs that end in the same state can differ in the last bits of a sum.
 SYNC_RELATIVE_TOLERANCE = 1e-6
 SYNC_ABSOLUTE_TOLERANCE = 1e-9
+
+
+def _differs(new, old):
+    return abs(new - old) > SYNC_ABSOLUTE_TOLERANCE + SYNC_RELATIVE_TOLERANCE * abs(old)
 
 
 def summarize(values):
@@ -172,7 +177,9 @@ def _compare_figure(case_name, name, before, figure):
                 continue
             width = new["max"] - new["min"] if len(new["values"]) > 1 else max(widths)
             low, high = old["min"] - width, old["max"] + width
-            worse = new["median"] > high if better == "lower" else new["median"] < low
+            bound = high if better == "lower" else low
+            worse = (new["median"] > high if better == "lower" else new["median"] < low) and _differs(
+                new["median"], bound)
             if worse:
                 findings.append({
                     "case": case_name, "figure": name, "variant": variant, "kind": "worse",
@@ -183,7 +190,7 @@ def _compare_figure(case_name, name, before, figure):
     if figure.get("kind") == "accuracy":
         new, old = figure.get("synchronous"), before.get("synchronous")
         if new is not None and old is not None:
-            if abs(new - old) > SYNC_ABSOLUTE_TOLERANCE + SYNC_RELATIVE_TOLERANCE * abs(old):
+            if _differs(new, old):
                 way = "changed"
                 if better == "lower":
                     way = "worse" if new > old else "better"
@@ -202,6 +209,41 @@ def worse_findings(findings):
     figure that is neither better nor worse (loops, maps), is not one."""
     return [f for f in findings if f["kind"] in ("worse", "failed") or
             (f["kind"] == "changed" and f.get("direction") == "worse")]
+
+
+def _by_figure(findings):
+    """One line per case and figure: its variants' findings joined, in the order found."""
+    lines, index = [], {}
+    for f in findings:
+        prefix = "%s %s (%s): " % (f.get("case"), f.get("figure"), f.get("variant"))
+        if f.get("figure") is None or not f["text"].startswith(prefix):
+            lines.append(f["text"])
+            continue
+        key = (f["case"], f["figure"])
+        part = "%s: %s" % (f["variant"], f["text"][len(prefix):])
+        if key in index:
+            lines[index[key]] += "; " + part
+        else:
+            index[key] = len(lines)
+            lines.append("%s %s: %s" % (f["case"], f["figure"], part))
+    return lines
+
+
+def _by_case(findings):
+    """One line per case: its figures' synchronous changes joined, in the order found."""
+    lines, index = [], {}
+    for f in findings:
+        prefix = "%s %s (synchronous): " % (f.get("case"), f.get("figure"))
+        if f.get("figure") is None or not f["text"].startswith(prefix):
+            lines.append(f["text"])
+            continue
+        part = "%s %s" % (f["figure"], f["text"][len(prefix):])
+        if f["case"] in index:
+            lines[index[f["case"]]] += "; " + part
+        else:
+            index[f["case"]] = len(lines)
+            lines.append("%s (synchronous): %s" % (f["case"], part))
+    return lines
 
 
 def duration_text(seconds):
@@ -272,13 +314,13 @@ def markdown(results, known_limits=""):
             comparison.get("baseline", "bench/baseline.json"), comparison["baseline_commit"],
             "no figure got worse by more than its measured run-to-run range" if not worse else
             "%d figure(s) worse by more than the measured run-to-run range" % len(worse)))
-        for f in worse:
-            add("- %s" % f["text"])
+        for line in _by_figure(worse):
+            add("- %s" % line)
         if others:
             add("")
             add("Changed at synchronous pacing, not for the worse:")
-            for f in others:
-                add("- %s" % f["text"])
+            for line in _by_case(others):
+                add("- %s" % line)
         if apart:
             add("")
             add("Not compared (other inputs under the same name):")

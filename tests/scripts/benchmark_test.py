@@ -86,6 +86,9 @@ class Compare(unittest.TestCase):
         # A median of 0.155 lies within the widened range; one of 0.05 is better, not worse.
         self.assertEqual(report.compare(old, results({"ate_m": figure(quiet=[0.15, 0.155, 0.17])})), [])
         self.assertEqual(report.compare(old, results({"ate_m": figure(quiet=[0.05])})), [])
+        # Runs that end in the same state, but for the last bits of a sum, are no change.
+        same = results({"ate_m": figure(quiet=[0.14 + 1e-12, 0.14 + 1e-12])})
+        self.assertEqual(report.compare(results({"ate_m": figure(quiet=[0.14, 0.14])}), same), [])
 
     def test_higher_is_better(self):
         old = results({"with_pose": figure("higher", quiet=[1699, 1700])})
@@ -187,6 +190,20 @@ class Markdown(unittest.TestCase):
         self.assertIn("- case_a ate_m (quiet): worse", text)
         self.assertIn("not for the worse:\n- case_a ate_m (synchronous): 0.2 -> 0.1 (better)", text)
         self.assertNotIn("A quick run", text)
+
+    def test_findings_one_line_per_figure_and_changes_per_case(self):
+        old = results({"ate_m": figure(sync=0.1, quiet=[0.1, 0.1], busy=[0.1]),
+                       "rmse": figure(sync=0.2), "loops": figure(None, sync=1)})
+        new = results({"ate_m": figure(sync=0.2, quiet=[0.2, 0.2], busy=[0.2]),
+                       "rmse": figure(sync=0.1), "loops": figure(None, sync=2)})
+        new["comparison"] = {"baseline_commit": "abc", "findings": report.compare(old, new)}
+        lines = report.markdown(new).splitlines()
+        worse = [line for line in lines if line.startswith("- case_a ate_m: ")]
+        self.assertEqual(len(worse), 1)
+        self.assertEqual([part.split(":")[0] for part in worse[0][len("- case_a ate_m: "):].split("; ")],
+                         ["quiet", "busy", "synchronous"])
+        self.assertIn("- case_a (synchronous): rmse 0.2000 -> 0.1000 m (better); loops 1.0000 -> 2.0000 m (changed)",
+                      lines)
 
     def test_no_baseline_yet(self):
         r = results({"ate_m": figure(quiet=[0.1])})
