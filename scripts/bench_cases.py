@@ -456,10 +456,11 @@ def real_cases(quick):
                            lambda ctx: {"sequence": kitti07(ctx)}, ["--mode", "mono", "--frames", "0:160"],
                            k07_figures, 18, sync_seconds=9))
     d05 = lambda ctx: {"sequence": drive0005(ctx), "drive": drive0005(ctx)}
+    # Issue 41: "no worse than today (154/154 at 0.30 m)", to two digits; the drive measured 0.302-0.315 m then.
     cases.append(slam_case(
         "d05_image02_mono", "real", "drive 0005 colour camera (image_02), 154 frames, mono", d05,
         ["--camera", "image_02", "--mode", "mono"],
-        {"ate_m": with_bars(ATE, bar("<=", 0.30, "quiet", source="issue 41")),
+        {"ate_m": with_bars(ATE, bar("<=", 0.305, "quiet", source="issue 41")),
          "with_pose": with_bars(WITH_POSE, bar(">=", 154, "quiet", source="issue 41")),
          "tracked": spec("frames tracked", "", "higher", digits=0),
          "keyframes_per_100": KEYFRAMES, "tracking_ms": TRACKING}, 18, sync_seconds=11))
