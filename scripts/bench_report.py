@@ -14,14 +14,18 @@ import statistics
 
 VARIANTS = ("synchronous", "quiet", "busy")
 REALTIME_VARIANTS = ("quiet", "busy")
-# Synchronous figures are bit-reproducible: anything beyond this is a change, not noise. Realtime figures are
-# compared with it too: runs that end in the same state can differ in the last bits of a sum.
+# Synchronous figures are bit-reproducible: anything beyond this is a change, not noise.
 SYNC_RELATIVE_TOLERANCE = 1e-6
 SYNC_ABSOLUTE_TOLERANCE = 1e-9
 
 
-def _differs(new, old):
-    return abs(new - old) > SYNC_ABSOLUTE_TOLERANCE + SYNC_RELATIVE_TOLERANCE * abs(old)
+def _differs(new, old, digits=None):
+    """Synchronous: beyond the tolerance above. Realtime (digits given): also by more than half a unit of the
+    figure's last printed digit, since runs are not reproducible below that and the page could not show it."""
+    tolerance = SYNC_ABSOLUTE_TOLERANCE + SYNC_RELATIVE_TOLERANCE * abs(old)
+    if digits is not None:
+        tolerance = max(tolerance, 0.5 * 10.0 ** -digits)
+    return abs(new - old) > tolerance
 
 
 def summarize(values):
@@ -179,7 +183,7 @@ def _compare_figure(case_name, name, before, figure):
             low, high = old["min"] - width, old["max"] + width
             bound = high if better == "lower" else low
             worse = (new["median"] > high if better == "lower" else new["median"] < low) and _differs(
-                new["median"], bound)
+                new["median"], bound, digits)
             if worse:
                 findings.append({
                     "case": case_name, "figure": name, "variant": variant, "kind": "worse",

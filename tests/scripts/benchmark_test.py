@@ -89,6 +89,11 @@ class Compare(unittest.TestCase):
         # Runs that end in the same state, but for the last bits of a sum, are no change.
         same = results({"ate_m": figure(quiet=[0.14 + 1e-12, 0.14 + 1e-12])})
         self.assertEqual(report.compare(results({"ate_m": figure(quiet=[0.14, 0.14])}), same), [])
+        # Nor is a median beyond the range by less than the page can show (half a unit of its last digit).
+        self.assertEqual(report.compare(results({"t": figure(quiet=[0.0], digits=0, unit="s")}),
+                                        results({"t": figure(quiet=[0.13], digits=0, unit="s")})), [])
+        self.assertEqual(len(report.compare(results({"t": figure(quiet=[0.0], digits=0, unit="s")}),
+                                            results({"t": figure(quiet=[0.6], digits=0, unit="s")}))), 1)
 
     def test_higher_is_better(self):
         old = results({"with_pose": figure("higher", quiet=[1699, 1700])})
