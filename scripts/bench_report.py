@@ -182,8 +182,8 @@ def _compare_figure(case_name, name, before, figure):
             width = new["max"] - new["min"] if len(new["values"]) > 1 else max(widths)
             low, high = old["min"] - width, old["max"] + width
             bound = high if better == "lower" else low
-            worse = (new["median"] > high if better == "lower" else new["median"] < low) and _differs(
-                new["median"], bound, digits)
+            beyond = new["median"] > bound if better == "lower" else new["median"] < bound
+            worse = beyond and _differs(new["median"], bound, digits)
             if worse:
                 findings.append({
                     "case": case_name, "figure": name, "variant": variant, "kind": "worse",
