@@ -185,12 +185,13 @@ def _compare_figure(case_name, name, before, figure):
             beyond = new["median"] > bound if better == "lower" else new["median"] < bound
             worse = beyond and _differs(new["median"], bound, digits)
             if worse:
+                detail = "median %s %s, outside the baseline's %s–%s widened by this run's range %s" % (
+                    _number(new["median"], digits), unit, _number(old["min"], digits), _number(old["max"], digits),
+                    _number(width, digits))
                 findings.append({
                     "case": case_name, "figure": name, "variant": variant, "kind": "worse",
-                    "baseline": old, "new": new,
-                    "text": "%s (%s): median %s %s, outside the baseline's %s–%s widened by this run's range %s" % (
-                        label, variant, _number(new["median"], digits), unit, _number(old["min"], digits),
-                        _number(old["max"], digits), _number(width, digits))})
+                    "baseline": old, "new": new, "detail": detail,
+                    "text": "%s (%s): %s" % (label, variant, detail)})
     if figure.get("kind") == "accuracy":
         new, old = figure.get("synchronous"), before.get("synchronous")
         if new is not None and old is not None:
@@ -200,11 +201,11 @@ def _compare_figure(case_name, name, before, figure):
                     way = "worse" if new > old else "better"
                 elif better == "higher":
                     way = "worse" if new < old else "better"
+                detail = "%s -> %s %s (%s)" % (_number(old, max(digits, 4)), _number(new, max(digits, 4)), unit, way)
                 findings.append({
                     "case": case_name, "figure": name, "variant": "synchronous", "kind": "changed",
-                    "direction": way, "baseline": old, "new": new,
-                    "text": "%s (synchronous): %s -> %s %s (%s)" % (
-                        label, _number(old, max(digits, 4)), _number(new, max(digits, 4)), unit, way)})
+                    "direction": way, "baseline": old, "new": new, "detail": detail,
+                    "text": "%s (synchronous): %s" % (label, detail)})
     return findings
 
 
@@ -215,38 +216,25 @@ def worse_findings(findings):
             (f["kind"] == "changed" and f.get("direction") == "worse")]
 
 
-def _by_figure(findings):
-    """One line per case and figure: its variants' findings joined, in the order found."""
+def _joined(findings, per_case):
+    """The findings' lines, one per case and figure (per_case: one per case), their details joined in the order
+    found; a finding without a detail (a failed case, or one of older results) keeps its own line."""
     lines, index = [], {}
     for f in findings:
-        prefix = "%s %s (%s): " % (f.get("case"), f.get("figure"), f.get("variant"))
-        if f.get("figure") is None or not f["text"].startswith(prefix):
+        if "detail" not in f:
             lines.append(f["text"])
             continue
-        key = (f["case"], f["figure"])
-        part = "%s: %s" % (f["variant"], f["text"][len(prefix):])
+        if per_case:
+            key, head = f["case"], "%s (%s): " % (f["case"], f["variant"])
+            part = "%s %s" % (f["figure"], f["detail"])
+        else:
+            key, head = (f["case"], f["figure"]), "%s %s: " % (f["case"], f["figure"])
+            part = "%s: %s" % (f["variant"], f["detail"])
         if key in index:
             lines[index[key]] += "; " + part
         else:
             index[key] = len(lines)
-            lines.append("%s %s: %s" % (f["case"], f["figure"], part))
-    return lines
-
-
-def _by_case(findings):
-    """One line per case: its figures' synchronous changes joined, in the order found."""
-    lines, index = [], {}
-    for f in findings:
-        prefix = "%s %s (synchronous): " % (f.get("case"), f.get("figure"))
-        if f.get("figure") is None or not f["text"].startswith(prefix):
-            lines.append(f["text"])
-            continue
-        part = "%s %s" % (f["figure"], f["text"][len(prefix):])
-        if f["case"] in index:
-            lines[index[f["case"]]] += "; " + part
-        else:
-            index[f["case"]] = len(lines)
-            lines.append("%s (synchronous): %s" % (f["case"], part))
+            lines.append(head + part)
     return lines
 
 
@@ -318,12 +306,12 @@ def markdown(results, known_limits=""):
             comparison.get("baseline", "bench/baseline.json"), comparison["baseline_commit"],
             "no figure got worse by more than its measured run-to-run range" if not worse else
             "%d figure(s) worse by more than the measured run-to-run range" % len(worse)))
-        for line in _by_figure(worse):
+        for line in _joined(worse, per_case=False):
             add("- %s" % line)
         if others:
             add("")
             add("Changed at synchronous pacing, not for the worse:")
-            for line in _by_case(others):
+            for line in _joined(others, per_case=True):
                 add("- %s" % line)
         if apart:
             add("")

@@ -172,8 +172,7 @@ bool Tracker::Relocalize(Frame& frame) {
 bool Tracker::RelocalizeAfterCollapse(Frame& frame, int last_inliers) {
   // Where frames were dropped, far points still match at the old place: they hold the rotation but not the
   // position, and a pose kept there on some of them drifts on until a loop pulls it back. Tracking that goes
-  // well seldom loses half its inliers from one frame to the next (never in 3700 frames of KITTI 07 forth and
-  // back, a map's first frame left out), so the search below is rare.
+  // well seldom loses half its inliers from one frame to the next, so the search below is rare.
   constexpr int kCollapseRatio = 2;
   if (inliers_ * kCollapseRatio >= last_inliers) return false;
   const int tracked_inliers = inliers_;
