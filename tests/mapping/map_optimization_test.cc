@@ -147,6 +147,30 @@ TEST_F(DisturbedStreet, OneWindowRestoresTheTruth) {
   EXPECT_LT(RmsPointError(), 0.01);
 }
 
+// The second pass (without the first pass's outliers) runs its own count of iterations: after a first pass of
+// one iteration, the second one's decide how close a map disturbed by 0.3 m comes to the truth.
+TEST_F(DisturbedStreet, TheSecondPassRunsItsOwnIterations) {
+  Disturb(0.3, 0.3);
+  GlobalBundleAdjustmentOptions options;
+  options.iterations = 1;
+  options.refine_iterations = 20;
+  auto lock = map_.WriteLock();
+  WriteGlobalBundleAdjustment(map_, AdjustMapInWindows(map_, 0, options, /*lock_map=*/false));
+  EXPECT_LT(WorstCenterError(), 1e-4);  // 5e-7 m
+}
+
+TEST_F(DisturbedStreet, ASecondPassOfOneIterationLeavesTheMapShortOfTheTruth) {
+  Disturb(0.3, 0.3);
+  GlobalBundleAdjustmentOptions options;
+  options.iterations = 1;
+  options.refine_iterations = 1;
+  auto lock = map_.WriteLock();
+  WriteGlobalBundleAdjustment(map_, AdjustMapInWindows(map_, 0, options, /*lock_map=*/false));
+  EXPECT_GT(WorstCenterError(), 0.01);  // 0.041 m
+  options.refine_iterations = 0;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
 // What a global BA after a loop meets: the loop correction left the keyframes about right at large (here
 // within a few centimetres), the points are off by more. Windows of 8 keyframes refine them, each holding the
 // keyframes outside it still.

@@ -96,6 +96,7 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 
 void GlobalBundleAdjustmentOptions::Check() const {
   Require(iterations >= 1, "global bundle adjustment: iterations must be >= 1");
+  Require(refine_iterations >= 1, "global bundle adjustment: refine_iterations must be >= 1");
   Require(window_keyframes >= 2, "global bundle adjustment: window_keyframes must be >= 2");
 }
 
@@ -174,7 +175,7 @@ BundleAdjustmentOptions SolverOptions(const GlobalBundleAdjustmentOptions& optio
   BundleAdjustmentOptions solver;
   solver.iterations = options.iterations;
   solver.refine_without_outliers = options.drop_outliers;
-  solver.refine_iterations = options.iterations;
+  solver.refine_iterations = options.refine_iterations;
   solver.abort = options.abort;
   return solver;
 }

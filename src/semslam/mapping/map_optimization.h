@@ -53,6 +53,9 @@ void ApplyBundleAdjustment(Map& map, const BundleAdjustmentProblem& problem,
 // left out of the final BA's second pass, from the same tracking).
 struct GlobalBundleAdjustmentOptions {
   int iterations = 10;
+  // The second pass's: it starts where the first stopped, which after a merge moved whole maps onto each
+  // other may still be far from its minimum.
+  int refine_iterations = 10;
   int window_keyframes = 1000;
   bool drop_outliers = true;
   // Monocular: each keyframe follows the stretch the BA gives the map around it (LocalScaleChanges), so that

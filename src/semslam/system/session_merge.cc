@@ -45,6 +45,7 @@ void SessionMergeOptions::Check() const {
   Require(!runs.empty(), "merge: no run folder given");
   Require(!output.empty(), "merge: no output folder given");
   Require(global_ba_iterations > 0, "merge: global_ba_iterations must be positive");
+  Require(global_ba_refine_iterations > 0, "merge: global_ba_refine_iterations must be positive");
   Require(global_ba_window_keyframes >= 2, "merge: global_ba_window_keyframes must be >= 2");
 }
 
@@ -197,6 +198,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   slam_options.loop.global_ba_window_keyframes = options.global_ba_window_keyframes;
   slam_options.final_global_ba = options.global_ba;
   slam_options.final_global_ba_iterations = options.global_ba_iterations;
+  slam_options.final_global_ba_refine_iterations = options.global_ba_refine_iterations;
   slam_options.final_refine_intrinsics = false;  // each map keeps the camera its run fitted
   if (stereo && !rig)
     throw InputError(runs.front().dir / "map.semslam", "a stereo run's map holds no stereo keyframe");

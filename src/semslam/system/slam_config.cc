@@ -84,6 +84,7 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"max_queued_keyframes", Bind(&o->max_queued_keyframes)},
       {"realtime_wait_for_mapping_frames", Bind(&o->realtime_wait_for_mapping_frames)},
       {"final_global_ba_iterations", Bind(&o->final_global_ba_iterations)},
+      {"final_global_ba_refine_iterations", Bind(&o->final_global_ba_refine_iterations)},
   };
   s["loop"] = {
       {"enabled", Bind(&o->loop.enabled)},

@@ -110,6 +110,7 @@ void SlamOptions::Check() const {
               realtime_wait_for_mapping_frames <= 10,
           "realtime_wait_for_mapping_frames must be in [0, 10]");
   Require(final_global_ba_iterations >= 1, "final_global_ba_iterations must be >= 1");
+  Require(final_global_ba_refine_iterations >= 1, "final_global_ba_refine_iterations must be >= 1");
   Require(std::isfinite(final_refine_intrinsics_min_reduction) &&
               final_refine_intrinsics_min_reduction >= 0 && final_refine_intrinsics_min_reduction < 1,
           "final_refine_intrinsics_min_reduction must be in [0, 1)");
@@ -432,6 +433,7 @@ void SlamSystem::Finish() {
     const bool refine = options_.final_refine_intrinsics && options_.mode == SensorMode::kMonocular;
     GlobalBundleAdjustmentOptions global_ba;
     global_ba.iterations = options_.final_global_ba_iterations;
+    global_ba.refine_iterations = options_.final_global_ba_refine_iterations;
     global_ba.window_keyframes = options_.loop.global_ba_window_keyframes;
     global_ba.follow_local_scale = options_.mode == SensorMode::kMonocular;
     SelfCalibrationOptions calibration;

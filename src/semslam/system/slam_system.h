@@ -80,6 +80,7 @@ struct SlamOptions {
   // keyframes and points of a drive depend on pacing only where it does not. 0: never wait.
   double realtime_wait_for_mapping_frames = 1.0;
   int final_global_ba_iterations = 20;
+  int final_global_ba_refine_iterations = 20;  // its second pass, without the outliers of the first
 
   void Check() const;
 };
