@@ -321,7 +321,6 @@ void LoopCloser::RunGlobalBundleAdjustment(std::uint64_t loop_keyframe_id, std::
   GlobalBundleAdjustmentOptions options;
   options.iterations = options_.global_ba_iterations;
   options.refine_iterations = options_.global_ba_iterations;
-  options.refine_iterations = options_.global_ba_iterations;
   options.window_keyframes = options_.global_ba_window_keyframes;
   options.abort = &global_ba_abort_;
   const GlobalBundleAdjustmentResult adjusted = AdjustMapInWindows(map_, map_id, options, /*lock_map=*/true);
