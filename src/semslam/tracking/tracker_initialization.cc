@@ -130,7 +130,6 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   // Full bundle adjustment of the two views, then the scale: median scene depth 1.
   GlobalBundleAdjustmentOptions two_view_ba;
   two_view_ba.iterations = 20;
-  two_view_ba.refine_iterations = 20;
   // Every point just passed the two views' inlier test, and dropping either of its two observations would take
   // the point along: the count of points decides below whether the map starts.
   two_view_ba.drop_outliers = false;
