@@ -41,8 +41,9 @@ struct SessionMergeOptions {
   bool global_ba = true;             // the final bundle adjustment of each merged map
   bool gps_fusion = true;            // the merged map fused with every drive's GPS log (its run's --gps)
   int global_ba_iterations = 20;
-  // The second pass's, to convergence: the merges and loops between drives leave each drive bent by the
-  // corrections spread along it, far from the minimum that a run's own final BA starts near.
+  // The second pass's, to convergence: the merges and loops between drives bend each drive by the corrections
+  // spread along it, which can leave the merged map further from its minimum than a run's own final BA
+  // starts.
   int global_ba_refine_iterations = 100;
   int global_ba_window_keyframes = 1000;
   bool show_progress = true;
