@@ -168,6 +168,9 @@ TEST_F(SecondPassOfDisturbedStreet, RunsItsOwnIterations) {
 
 TEST_F(SecondPassOfDisturbedStreet, OfOneIterationLeavesTheMapShortOfTheTruth) {
   EXPECT_GT(WorstCenterErrorAfter(1), 0.01);  // 0.041 m
+}
+
+TEST(GlobalBundleAdjustmentOptions, RefusesASecondPassOfNoIterations) {
   GlobalBundleAdjustmentOptions options;
   options.refine_iterations = 0;
   EXPECT_THROW(options.Check(), InvalidArgument);
