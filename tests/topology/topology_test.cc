@@ -173,6 +173,27 @@ TEST(Routing, ShortestRouteAsSteps) {
   EXPECT_EQ(FormatDistance(1234.0), "1.2 km");
 }
 
+// A landmark 12 m before a corner shares the corner's node, which stays where the streets meet: anchored at
+// the landmark, the junction moved 12 m down one street, and a route from the north street to the east one
+// drove on to it and turned around (24 m longer).
+TEST(Routing, ALandmarkBesideACornerLeavesTheJunctionAtTheCorner) {
+  const Georeference g = MakeGeoreference();
+  // East through the corner (200, 0), round the block to the north, and back south through the corner,
+  // turning right (west) there.
+  const FramePositions keyframes = Drive(g, {{0, 0}, {300, 0}, {300, 100}, {200, 100}, {200, 0}, {100, 0}});
+  const TopologicalMap m = BuildTopologicalMap(
+      keyframes,
+      {Placed(g, "Market", {188, -8}), Placed(g, "Tower", {210, 60}), Placed(g, "Depot", {250, -8})}, g);
+  ASSERT_EQ(m.landmarks.size(), 3u);
+  const TopoNode& market = m.nodes.at(static_cast<size_t>(m.landmarks[0].node));
+  EXPECT_TRUE(market.is_turn && market.is_landmark);
+  EXPECT_LT((market.enu.head<2>() - Eigen::Vector2d(200, 0)).norm(), 3.0);
+  const Route route = FindRoute(m, "Tower", "Depot");
+  EXPECT_NEAR(route.length_m, 110.0, 3.0);  // 60 m south to the corner, 50 m east
+  for (const RouteStep& step : route.steps) EXPECT_NE(step.turn, TurnDirection::kUTurn) << step.text;
+  EXPECT_EQ(route.steps[2].text, "Turn left.");
+}
+
 TEST(Routing, UnconnectedPlaces) {
   Block b;
   b.map.edges.clear();

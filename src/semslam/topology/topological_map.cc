@@ -255,7 +255,9 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
     k = end;
   }
 
-  // 2. Places: landmarks first, then turn events; an event near an existing node's anchor joins it.
+  // 2. Places: turn events first, then landmarks; one near an existing node's anchor joins it. A turn is
+  // where streets meet, so a node that has one stays there: anchored at a landmark beside the corner, the
+  // junction moved with it, and routes through the corner drove on to the landmark and turned around.
   const auto nearest_node = [&](const Eigen::Vector3d& p) -> int {
     int best = -1;
     double best_d = options.fuse_distance_m;
@@ -277,6 +279,20 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
     return map.nodes.back();
   };
 
+  // Per node: the sums of its left, right and u-turn angles.
+  std::vector<Eigen::Vector3d> angle_sums;
+  for (const TurnEvent& t : turns) {
+    int node = nearest_node(points[static_cast<size_t>(t.keyframe)]);
+    if (node < 0) node = new_node(t.keyframe).id;
+    TopoNode& n = map.nodes[static_cast<size_t>(node)];
+    n.is_turn = true;
+    ++n.turn_events;
+    angle_sums.resize(map.nodes.size(), Eigen::Vector3d::Zero());
+    const TurnDirection direction = ClassifyTurn(t.angle, 0.0);
+    const int kind = direction == TurnDirection::kUTurn ? 2 : direction == TurnDirection::kLeft ? 0 : 1;
+    (kind == 0 ? n.left_turns : kind == 1 ? n.right_turns : n.u_turns)++;
+    angle_sums[static_cast<size_t>(node)][kind] += t.angle;
+  }
   for (const PlacedLandmark& placed : landmarks) {
     TopoLandmark l;
     l.name = placed.landmark.name;
@@ -305,20 +321,6 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
       l.node = node;
     }
     map.landmarks.push_back(std::move(l));
-  }
-  // Per node: the sums of its left, right and u-turn angles.
-  std::vector<Eigen::Vector3d> angle_sums;
-  for (const TurnEvent& t : turns) {
-    int node = nearest_node(points[static_cast<size_t>(t.keyframe)]);
-    if (node < 0) node = new_node(t.keyframe).id;
-    TopoNode& n = map.nodes[static_cast<size_t>(node)];
-    n.is_turn = true;
-    ++n.turn_events;
-    angle_sums.resize(map.nodes.size(), Eigen::Vector3d::Zero());
-    const TurnDirection direction = ClassifyTurn(t.angle, 0.0);
-    const int kind = direction == TurnDirection::kUTurn ? 2 : direction == TurnDirection::kLeft ? 0 : 1;
-    (kind == 0 ? n.left_turns : kind == 1 ? n.right_turns : n.u_turns)++;
-    angle_sums[static_cast<size_t>(node)][kind] += t.angle;
   }
   for (TopoNode& n : map.nodes) {
     const size_t i = static_cast<size_t>(n.id);

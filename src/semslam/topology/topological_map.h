@@ -7,9 +7,10 @@
 //  1. Turn events: at each keyframe, the signed heading change between the path's direction over the
 //     `turn_window_m` before it and over the `turn_window_m` after it (positive = counter-clockwise = left).
 //     Each run of keyframes above `turn_threshold_deg` with one sign gives one event, at its peak.
-//  2. Places: landmarks within `landmark_max_distance_m` of the trajectory first (at their nearest keyframe),
-//     then turn events; an event within `fuse_distance_m` of an existing node's anchor joins that node (same
-//     place: a revisit, two landmarks at one spot, a landmark at a corner), else it starts a new node.
+//  2. Places: turn events first, then landmarks within `landmark_max_distance_m` of the trajectory (at their
+//     nearest keyframe); one within `fuse_distance_m` of an existing node's anchor joins that node (same
+//     place: a revisit, two landmarks at one spot, a landmark at a corner, which joins the corner's node
+//     where the streets meet), else it starts a new node.
 //  3. Visits: every pass of the trajectory within `fuse_distance_m` of a node (closest point of the pass,
 //     on the keyframe polyline) is a visit of it; edges join consecutive visits along the trajectory, with
 //     the arc length between them; a pair of nodes joined on several passes keeps its shortest edge.
@@ -17,8 +18,8 @@
 //  one
 //     whose polyline lies within `street_max_distance_m` of more than half of the edge's polyline (sampled
 //     every 2 m); the most covering one when several do; none when no street does.
-// Several drives one after another (FramePosition::segment, a merged map's sessions) are kept apart: turn windows
-// stay within a drive, and neither a pass nor an edge spans the step from one drive to the next.
+// Several drives one after another (FramePosition::segment, a merged map's sessions) are kept apart: turn
+// windows stay within a drive, and neither a pass nor an edge spans the step from one drive to the next.
 // Edges are traversable both ways (a person walks back; streets are taken as two-way).
 
 #include <optional>
