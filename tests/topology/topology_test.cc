@@ -174,8 +174,8 @@ TEST(Routing, ShortestRouteAsSteps) {
 }
 
 // A landmark 12 m before a corner shares the corner's node, which stays where the streets meet: anchored at
-// the landmark, the junction moved 12 m down one street, and a route from the north street to the east one
-// drove on to it and turned around (24 m longer).
+// the landmark, the junction would move 12 m down one street, and a route from the north street to the east
+// one would go on to it and turn around (24 m longer).
 TEST(Routing, ALandmarkBesideACornerLeavesTheJunctionAtTheCorner) {
   const Georeference g = MakeGeoreference();
   // East through the corner (200, 0), round the block to the north, and back south through the corner,

@@ -257,7 +257,7 @@ TopologicalMap BuildTopologicalMap(const FramePositions& keyframes,
 
   // 2. Places: turn events first, then landmarks; one near an existing node's anchor joins it. A turn is
   // where streets meet, so a node that has one stays there: anchored at a landmark beside the corner, the
-  // junction moved with it, and routes through the corner drove on to the landmark and turned around.
+  // junction would move with it, and routes through the corner would go on to the landmark and turn around.
   const auto nearest_node = [&](const Eigen::Vector3d& p) -> int {
     int best = -1;
     double best_d = options.fuse_distance_m;
