@@ -5,6 +5,7 @@
 
 #include <fstream>
 #include <set>
+#include <string>
 
 #include "semslam/io/trajectory_io.h"
 #include "support/test_support.h"
@@ -80,6 +81,33 @@ TEST(Kitti07, MonocularInitializesEarlyTracksEveryLaterFrameAndStaysAccurate) {
   const nlohmann::json pj = ReadJson(plain / "run.json");
   EXPECT_TRUE(pj.value("intrinsics_refinement", nlohmann::json{1}).empty());
   EXPECT_GT(pj.value("ate_rmse", 0.0), 1.5 * j["ate_rmse"].get<double>());
+}
+
+// The same frames at a third of the frame rate (every third frame, 54 in all, about 1.7 m apart): a car at
+// three times the speed, or a slower camera. Where the rate of turn or pitch changes between two frames the
+// constant-velocity prediction misses by more than the search window; tracked only from it, frame 49 was
+// lost and the drive ended with 49 frames with a pose.
+TEST(Kitti07, AThirdOfTheFrameRateIsTrackedToTheLastFrame) {
+  SEMSLAM_REQUIRE_BINARY();
+  SEMSLAM_REQUIRE_SHARED_DATA(kitti, "kitti_odom_07_3dv");
+  std::string frames;
+  for (int f = 0; f < 160; f += 3) {
+    if (!frames.empty()) frames += ',';
+    frames.append(std::to_string(f));
+  }
+  SEMSLAM_ASSERT_ARTIFACT(dir, ComposedRun("kitti07_every_third",
+                                           {"compose", "--sequence", (kitti / "sequences" / "07").string(),
+                                            "--frames", frames, "-q"},
+                                           {"run", "--mode", "mono", "--pacing", "synchronous", "-q"}));
+  const nlohmann::json j = ReadJson(dir / "out" / "run.json");
+  ASSERT_TRUE(j.is_object()) << ReadText(dir / "out" / "run.json");
+  EXPECT_EQ(j.value("frames", -1), 54);
+  EXPECT_EQ(j.value("with_pose", -1), 54);
+  EXPECT_EQ(j.value("predicted", -1), 0);
+  EXPECT_EQ(j["maps"].value("count", -1), 1);
+  // 1.05 x the reproducible value, 0.1735 m; the SPEC's bar for the drive is 0.3 m.
+  EXPECT_LE(j.value("ate_rmse", 1e9), 1.05 * 0.1735);
+  EXPECT_EQ(j.value("ate_matched", -1), 54);
 }
 
 }  // namespace

@@ -167,9 +167,16 @@ class Tracker {
   bool InitializeStereo(Frame& frame);
   // Inliers matched to the reference keyframe by bag of words, from the last frame's pose; 0 when it fails.
   int TrackReferenceKeyFrame(Frame& frame);
-  // Inliers among the last frame's points matched with the constant-velocity prediction; 0 when it fails.
+  // Inliers among the last frame's points matched from a predicted pose, the pose then optimized; 0 when
+  // it fails.
+  int TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world);
+  // The same from the constant-velocity prediction.
   int TrackWithMotionModel(Frame& frame);
-  // The motion model, checked against the reference keyframe when it keeps few of the last frame's points.
+  // The same from predictions turned about the camera centre: no turn since the last frame, and pitch and
+  // heading one and two search windows either way. The frame keeps the pose with the most inliers.
+  int TrackWithTurnedPredictions(Frame& frame);
+  // The motion model; where it keeps few of the last frame's points, a turned prediction that keeps clearly
+  // more, then the reference keyframe by bag of words (tracker_motion.cc).
   bool TrackWithMotionModelOrReference(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);

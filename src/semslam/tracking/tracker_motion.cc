@@ -1,9 +1,10 @@
-// Tracker: a frame tracked from the last one: the constant-velocity prediction, and the reference keyframe
-// by bag of words.
+// Tracker: a frame tracked from the last one: the constant-velocity prediction, predictions turned around
+// it, and the reference keyframe by bag of words.
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <utility>
 #include <vector>
 
@@ -11,6 +12,17 @@
 #include "semslam/tracking/tracker.h"
 
 namespace semslam {
+
+namespace {
+
+// Search radius around a projected point, in pixels at level 0, from the constant-velocity prediction.
+float MotionModelRadius(bool monocular) { return monocular ? 15.0f : 7.0f; }
+
+// A turned prediction replaces the motion model's only when it tracks half as many points again: one about
+// as good is the same pose found from another start, and frames the prediction tracks stay as they were.
+constexpr double kTurnedGain = 1.5;
+
+}  // namespace
 
 int Tracker::TrackReferenceKeyFrame(Frame& frame) {
   ComputeBow(frame);
@@ -25,10 +37,10 @@ int Tracker::TrackReferenceKeyFrame(Frame& frame) {
   return inliers >= 10 ? inliers : 0;
 }
 
-int Tracker::TrackWithMotionModel(Frame& frame) {
-  frame.SetPose(*velocity_ * last_frame_->camera_from_world());
+int Tracker::TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world) {
+  frame.SetPose(camera_from_world);
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
-  const float radius = options_.monocular ? 15.0f : 7.0f;
+  const float radius = MotionModelRadius(options_.monocular);
   int n = SearchFromLastFrame(frame, *last_frame_, radius, options_.monocular);
   n = DropDynamicMatches(frame);
   if (n < 20) {
@@ -43,11 +55,71 @@ int Tracker::TrackWithMotionModel(Frame& frame) {
   return inliers >= 10 ? inliers : 0;
 }
 
+int Tracker::TrackWithMotionModel(Frame& frame) {
+  return TrackFromPrediction(frame, *velocity_ * last_frame_->camera_from_world());
+}
+
+int Tracker::TrackWithTurnedPredictions(Frame& frame) {
+  const Rigid3d predicted = *velocity_ * last_frame_->camera_from_world();
+  // Turned about the camera's own centre (a rotation applied on the camera side keeps it), in steps of
+  // one search window's width, so that together the windows cover two widths either way.
+  const double step = 2.0 * MotionModelRadius(options_.monocular) / frame.data().camera.fx;
+  std::vector<Rigid3d> starts;
+  // No turn since the last frame: the rate of turn or pitch of the last step stopped (the top of a bump).
+  const Eigen::Quaterniond& last_rotation = last_frame_->camera_from_world().rotation;
+  starts.emplace_back(last_rotation,
+                      last_rotation * (predicted.rotation.conjugate() * predicted.translation));
+  // Pitch (about x) and heading (about y), one and two steps either way.
+  const std::array<Eigen::Vector3d, 2> axes{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY()};
+  for (const Eigen::Vector3d& axis : axes) {
+    for (const double steps : {-2.0, -1.0, 1.0, 2.0}) {
+      starts.push_back(
+          Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(steps * step, axis)), Eigen::Vector3d::Zero()) *
+          predicted);
+    }
+  }
+  int best = 0;
+  Rigid3d best_pose;
+  std::vector<MapPoint*> best_points;
+  for (const Rigid3d& start : starts) {
+    const int inliers = TrackFromPrediction(frame, start);
+    if (inliers > best) {
+      best = inliers;
+      best_pose = frame.camera_from_world();
+      best_points = frame.map_points;
+    }
+  }
+  if (best > 0) {
+    frame.SetPose(best_pose);
+    frame.map_points = std::move(best_points);
+  }
+  return best;
+}
+
 bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
-  const int predicted = TrackWithMotionModel(frame);
-  if (predicted == 0) return TrackReferenceKeyFrame(frame) > 0;
+  int predicted = TrackWithMotionModel(frame);
   const int last_points = last_frame_->CountMatches();
-  if (predicted >= options_.motion_model_min_kept_ratio * last_points) return true;
+  const auto enough = [&](int inliers) {
+    return inliers > 0 && inliers >= options_.motion_model_min_kept_ratio * last_points;
+  };
+  if (enough(predicted)) return true;
+  // Few kept: the rate of turn or pitch may have changed since the last frame (a bump, a tightening turn).
+  {
+    const Rigid3d predicted_pose = frame.camera_from_world();
+    std::vector<MapPoint*> predicted_points = frame.map_points;
+    const int turned = TrackWithTurnedPredictions(frame);
+    if (turned > kTurnedGain * predicted) {
+      spdlog::debug(
+          "frame {}: the motion model kept {} of the last frame's {} points, a turned prediction {}",
+          frame.id(), predicted, last_points, turned);
+      predicted = turned;
+    } else {
+      frame.SetPose(predicted_pose);
+      frame.map_points = std::move(predicted_points);
+    }
+  }
+  if (enough(predicted)) return true;
+  if (predicted == 0) return TrackReferenceKeyFrame(frame) > 0;
   const Rigid3d predicted_pose = frame.camera_from_world();
   std::vector<MapPoint*> predicted_points = frame.map_points;
   const int unpredicted = TrackReferenceKeyFrame(frame);
