@@ -448,7 +448,9 @@ TEST(GeoCity, FusionWithFivePercentOutliers) { MeasureFusion(0.05, 1, 1200, 0); 
 // seeds 11, 12 and 13: 1.29, 1.62 and 2.24 m. The error is mostly height (0.90 m of the 2.18 m is
 // horizontal), from the fused height where the drive ends: the Post Office's nearest keyframe, 5 frames from
 // the end, is 1.63 m too high (at most 0.41 m in keyframes sampled from frame 720 to 2520; the first 1.10 m);
-// the fit's tilt there, 0.66 deg, adds 0.4 m over the 32.7 m to the landmark. Run them with
+// the fit's tilt there, 0.66 deg, adds 0.4 m over the 32.7 m to the landmark. The drive's last two fixes are
+// 2.21 and 1.72 m too high (GPS seed 0), and no one precision of the keyframe chain does better: its edges'
+// information times 0.25, 1, 4, 16, 64 gives 2.52, 2.18, 2.14, 3.46, 13.3 m. Run them with
 // --gtest_also_run_disabled_tests.
 TEST(GeoCity, DISABLED_FusionOfADriftingMapWithGpsEvery30FramesSeed3) { MeasureFusion(0.0, 3, 3000, 0); }
 
