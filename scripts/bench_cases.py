@@ -518,6 +518,10 @@ def real_cases(quick):
         "k07_cut3", "real", "KITTI 07 composed 0-59, 80-159 (a 2 s gap), back 158-0 (299 frames): a new map, merged",
         lambda ctx: {"sequence": composed(ctx, kitti07(ctx), "0-59,80-159,158-0")}, ["--mode", "mono"],
         composed_figures([]), 33, sync_seconds=15))
+    cases.append(slam_case(
+        "k07_third", "real", "KITTI 07 frames 0-159, every third (54 frames): a third of the frame rate",
+        lambda ctx: {"sequence": composed(ctx, kitti07(ctx), ",".join(str(f) for f in range(0, 160, 3)))},
+        ["--mode", "mono"], composed_figures([]), 20, sync_seconds=6))
     return cases
 
 
