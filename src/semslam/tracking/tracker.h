@@ -168,15 +168,14 @@ class Tracker {
   // Inliers matched to the reference keyframe by bag of words, from the last frame's pose; 0 when it fails.
   int TrackReferenceKeyFrame(Frame& frame);
   // Inliers among the last frame's points matched from a predicted pose, the pose then optimized; 0 when
-  // it fails.
-  int TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world);
-  // The same from the constant-velocity prediction.
-  int TrackWithMotionModel(Frame& frame);
-  // The same from predictions turned about the camera centre: no turn since the last frame, and pitch and
-  // heading one and two search windows either way. The frame keeps the pose with the most inliers.
-  int TrackWithTurnedPredictions(Frame& frame);
-  // The motion model; where it keeps few of the last frame's points, a turned prediction that keeps clearly
-  // more, then the reference keyframe by bag of words (tracker_motion.cc).
+  // it fails or cannot keep more than `more_than`.
+  int TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world, int more_than = 0);
+  // The same from `predicted` turned about the camera centre: no turn since the last frame, and pitch and
+  // heading one and two search windows either way. The frame keeps the pose with the most inliers; 0 when
+  // none keeps more than `more_than`.
+  int TrackWithTurnedPredictions(Frame& frame, const Rigid3d& predicted, int more_than);
+  // The constant-velocity prediction; where it keeps few of the last frame's points, a turned prediction
+  // that keeps clearly more, then the reference keyframe by bag of words (tracker_motion.cc).
   bool TrackWithMotionModelOrReference(Frame& frame);
   bool TrackLocalMap(Frame& frame);
   bool Relocalize(Frame& frame);

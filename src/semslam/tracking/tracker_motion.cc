@@ -37,7 +37,7 @@ int Tracker::TrackReferenceKeyFrame(Frame& frame) {
   return inliers >= 10 ? inliers : 0;
 }
 
-int Tracker::TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world) {
+int Tracker::TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world, int more_than) {
   frame.SetPose(camera_from_world);
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
   const float radius = MotionModelRadius(options_.monocular);
@@ -48,19 +48,15 @@ int Tracker::TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world)
     SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
     n = DropDynamicMatches(frame);
   }
-  if (n < 20) return 0;
+  // A pose keeps at most its matches as inliers: one that cannot pass `more_than` is not optimized.
+  if (n < 20 || n <= more_than) return 0;
   std::fill(frame.outliers.begin(), frame.outliers.end(), false);
   OptimizeFramePose(frame);
   const int inliers = DiscardOutliers(frame);
   return inliers >= 10 ? inliers : 0;
 }
 
-int Tracker::TrackWithMotionModel(Frame& frame) {
-  return TrackFromPrediction(frame, *velocity_ * last_frame_->camera_from_world());
-}
-
-int Tracker::TrackWithTurnedPredictions(Frame& frame) {
-  const Rigid3d predicted = *velocity_ * last_frame_->camera_from_world();
+int Tracker::TrackWithTurnedPredictions(Frame& frame, const Rigid3d& predicted, int more_than) {
   // Turned about the camera's own centre (a rotation applied on the camera side keeps it), in steps of
   // one search window's width, so that together the windows cover two widths either way.
   const double step = 2.0 * MotionModelRadius(options_.monocular) / frame.data().camera.fx;
@@ -82,8 +78,8 @@ int Tracker::TrackWithTurnedPredictions(Frame& frame) {
   Rigid3d best_pose;
   std::vector<MapPoint*> best_points;
   for (const Rigid3d& start : starts) {
-    const int inliers = TrackFromPrediction(frame, start);
-    if (inliers > best) {
+    const int inliers = TrackFromPrediction(frame, start, std::max(more_than, best));
+    if (inliers > best && inliers > more_than) {
       best = inliers;
       best_pose = frame.camera_from_world();
       best_points = frame.map_points;
@@ -97,43 +93,43 @@ int Tracker::TrackWithTurnedPredictions(Frame& frame) {
 }
 
 bool Tracker::TrackWithMotionModelOrReference(Frame& frame) {
-  int predicted = TrackWithMotionModel(frame);
+  const Rigid3d predicted = *velocity_ * last_frame_->camera_from_world();
+  int tracked = TrackFromPrediction(frame, predicted);
   const int last_points = last_frame_->CountMatches();
   const auto enough = [&](int inliers) {
     return inliers > 0 && inliers >= options_.motion_model_min_kept_ratio * last_points;
   };
-  if (enough(predicted)) return true;
+  if (enough(tracked)) return true;
+  // The pose and matches to go back to where a later search does worse. Both searches leave no outlier flags
+  // (DiscardOutliers clears them).
+  Rigid3d kept_pose = frame.camera_from_world();
+  std::vector<MapPoint*> kept_points = frame.map_points;
+  const auto restore = [&] {
+    frame.SetPose(kept_pose);
+    frame.map_points = kept_points;
+  };
   // Few kept: the rate of turn or pitch may have changed since the last frame (a bump, a tightening turn).
-  {
-    const Rigid3d predicted_pose = frame.camera_from_world();
-    std::vector<MapPoint*> predicted_points = frame.map_points;
-    const int turned = TrackWithTurnedPredictions(frame);
-    if (turned > kTurnedGain * predicted) {
-      spdlog::debug(
-          "frame {}: the motion model kept {} of the last frame's {} points, a turned prediction {}",
-          frame.id(), predicted, last_points, turned);
-      predicted = turned;
-    } else {
-      frame.SetPose(predicted_pose);
-      frame.map_points = std::move(predicted_points);
-    }
+  const int turned = TrackWithTurnedPredictions(frame, predicted, static_cast<int>(kTurnedGain * tracked));
+  if (turned > 0) {
+    spdlog::debug("frame {}: the motion model kept {} of the last frame's {} points, a turned prediction {}",
+                  frame.id(), tracked, last_points, turned);
+    tracked = turned;
+    kept_pose = frame.camera_from_world();
+    kept_points = frame.map_points;
+  } else {
+    restore();
   }
-  if (enough(predicted)) return true;
-  if (predicted == 0) return TrackReferenceKeyFrame(frame) > 0;
-  const Rigid3d predicted_pose = frame.camera_from_world();
-  std::vector<MapPoint*> predicted_points = frame.map_points;
+  if (enough(tracked)) return true;
+  if (tracked == 0) return TrackReferenceKeyFrame(frame) > 0;
   const int unpredicted = TrackReferenceKeyFrame(frame);
-  if (unpredicted > predicted) {
+  if (unpredicted > tracked) {
     spdlog::info(
         "frame {}: the motion model kept {} of the last frame's {} points; matched to the reference "
         "keyframe without prediction: {} inliers, that pose is kept",
-        frame.id(), predicted, last_points, unpredicted);
+        frame.id(), tracked, last_points, unpredicted);
     return true;
   }
-  // Both searches leave no outlier flags (DiscardOutliers clears them), so the motion model's matches go back
-  // as they were.
-  frame.SetPose(predicted_pose);
-  frame.map_points = std::move(predicted_points);
+  restore();
   return true;
 }
 
