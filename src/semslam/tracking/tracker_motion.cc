@@ -41,8 +41,8 @@ int Tracker::TrackFromPrediction(Frame& frame, const Rigid3d& camera_from_world,
   frame.SetPose(camera_from_world);
   std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
   const float radius = MotionModelRadius(options_.monocular);
-  int n = SearchFromLastFrame(frame, *last_frame_, radius, options_.monocular);
-  n = DropDynamicMatches(frame);
+  SearchFromLastFrame(frame, *last_frame_, radius, options_.monocular);
+  int n = DropDynamicMatches(frame);
   if (n < 20) {
     std::fill(frame.map_points.begin(), frame.map_points.end(), nullptr);
     SearchFromLastFrame(frame, *last_frame_, 2.0f * radius, options_.monocular);
