@@ -262,9 +262,18 @@ TrackingResult Tracker::Track(std::uint64_t frame_id, double timestamp, const cv
   result.new_keyframes = new_keyframes_;
   if (result.relocalized) ++num_relocalizations_;
   last_frame_ = std::make_unique<Frame>(std::move(frame));
+  HandKeyFramesToMapper();
   result.milliseconds = watch.ElapsedMs();
   timing_.Add("tracking", result.milliseconds);
   return result;
+}
+
+void Tracker::HandKeyFramesToMapper() {
+  if (keyframes_for_mapper_.empty()) return;
+  for (KeyFrame* kf : keyframes_for_mapper_) mapper_->InsertKeyFrame(kf);
+  keyframes_for_mapper_.clear();
+  if (holding_mapper_) mapper_->SetNotStop(false);
+  holding_mapper_ = false;
 }
 
 bool Tracker::TrackInMap(Frame& frame, TrackingResult& result) {

@@ -213,6 +213,8 @@ class Tracker {
   int OptimizeFramePose(Frame& frame);
   bool NeedNewKeyFrame(const Frame& frame) const;
   void CreateNewKeyFrame(Frame& frame);
+  // Queues the keyframes this frame made in the mapper (at the end of Track()).
+  void HandKeyFramesToMapper();
   void ComputeBow(Frame& frame) const;
   // Clears the matches pose optimization rejected; returns the matches left to points in the map.
   int DiscardOutliers(Frame& frame) const;
@@ -250,8 +252,8 @@ class Tracker {
   std::vector<KeyFrame*> local_keyframes_;
   std::vector<MapPoint*> local_points_;
   int inliers_ = 0;
-  // The last frame's inliers when TrackInMap tracked it, else 0: a map's first frames count the points the
-  // mapper has made by then, which at synchronous pacing still depends on the machine's load.
+  // The last frame's inliers when TrackInMap tracked it, else 0 (a map's first frame counts its points, not
+  // inliers of a pose optimization).
   int last_tracked_inliers_ = 0;
   int num_relocalizations_ = 0;
   int num_new_maps_ = 0;
@@ -282,6 +284,11 @@ class Tracker {
 
   std::vector<FrameRecord> records_;
   std::vector<NewKeyFrame> new_keyframes_;  // of the frame being tracked
+  // The frame's new keyframes reach the mapper only once the frame's record is taken: a local BA of a
+  // keyframe already queued could otherwise move it between the two, and the frame's pose relative to its
+  // own keyframe would depend on the threads' timing, at synchronous pacing too.
+  std::vector<KeyFrame*> keyframes_for_mapper_;
+  bool holding_mapper_ = false;  // SetNotStop(true) since CreateNewKeyFrame, until the hand-over
 };
 
 }  // namespace semslam

@@ -38,8 +38,7 @@ bool Tracker::InitializeStereo(Frame& frame) {
   local_keyframes_ = {kf};
   local_points_ = {frame.map_points.begin(), frame.map_points.end()};
   std::erase(local_points_, nullptr);
-  lock.unlock();
-  if (mapper_) mapper_->InsertKeyFrame(kf);
+  if (mapper_) keyframes_for_mapper_.push_back(kf);
   return true;
 }
 
@@ -166,14 +165,11 @@ bool Tracker::InitializeMonocular(Frame& frame) {
   // The frames from the map's first one to this one get poses in it, so the trajectory starts where the map
   // does.
   PoseInitializationFrames(kf1, kf2);
+  inliers_ = kf2->CountTrackedPoints(1);
   lock.unlock();
   init_frame_.reset();
   init_between_frames_.clear();
-  if (mapper_) {
-    mapper_->InsertKeyFrame(kf1);
-    mapper_->InsertKeyFrame(kf2);
-  }
-  inliers_ = kf2->CountTrackedPoints(1);
+  if (mapper_) keyframes_for_mapper_.insert(keyframes_for_mapper_.end(), {kf1, kf2});
   return true;
 }
 

@@ -58,7 +58,8 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
 }
 
 void Tracker::CreateNewKeyFrame(Frame& frame) {
-  if (!mapper_->SetNotStop(true)) return;
+  if (!mapper_->SetNotStop(true)) return;  // held until Track() hands the keyframe over
+  holding_mapper_ = true;
   auto lock = map_.WriteLock();
   // A merge or loop correction between tracking and now would otherwise put the keyframe where the frame was
   // before the map moved.
@@ -96,9 +97,7 @@ void Tracker::CreateNewKeyFrame(Frame& frame) {
     }
   }
   last_keyframe_ = kf;
-  lock.unlock();
-  mapper_->InsertKeyFrame(kf);
-  mapper_->SetNotStop(false);
+  keyframes_for_mapper_.push_back(kf);
 }
 
 }  // namespace semslam
