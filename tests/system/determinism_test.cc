@@ -94,6 +94,23 @@ std::string ModeName(const ::testing::TestParamInfo<std::string>& param) { retur
 
 INSTANTIATE_TEST_SUITE_P(Modes, SynchronousRuns, ::testing::Values("mono", "stereo"), ModeName);
 
+// A monocular map that starts after a black-out (seed 2027's town from frame 640, frames 750-769 black, a new
+// map at 770). The tracker once handed a frame's new keyframes to the mapper before it took the frame's
+// record (and, at an initialization, counted the keyframe's points), and a local BA on the mapper's thread
+// could move the keyframe in between: beside two busy processes, 5 of 5 synchronous runs of KITTI 00 every
+// 2nd frame differed (first at frame 534, the second map's first keyframes). On this short drive the race
+// showed in none of 3 such runs; the test holds a map restart's path to the same bytes.
+TEST(SynchronousRunsAfterABlackOut, ANewMonocularMapGivesTheSameBytesTwice) {
+  SEMSLAM_REQUIRE_BINARY();
+  SEMSLAM_ASSERT_ARTIFACT(dir, LookAlikeBlackOutRun());
+  std::vector<std::string> args = LookAlikeBlackOutRunArgs();
+  std::erase(args, "-q");
+  args.insert(args.end(), {"--sequence", (dir / "sequence").string()});
+  const nlohmann::json run = ExpectIdenticalRuns(args);
+  ASSERT_TRUE(run.is_object());
+  EXPECT_GE(run["maps"].value("count", 0), 2) << "no new map started: " << run.dump(1);
+}
+
 TEST(SynchronousRunsOnKitti, Kitti07MonocularGivesTheSameBytesTwice) {
   SEMSLAM_REQUIRE_BINARY();
   SEMSLAM_REQUIRE_SHARED_DATA(kitti, "kitti_odom_07_3dv");

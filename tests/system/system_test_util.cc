@@ -172,6 +172,26 @@ Artifact ComposedRun(const std::string& name, const std::vector<std::string>& co
   });
 }
 
+std::vector<std::string> LookAlikeBlackOutRunArgs() {
+  return {
+      "run", "--mode", "mono", "--frames", "640:", "--pacing", "synchronous", "--segmenter", "none", "-q"};
+}
+
+Artifact LookAlikeBlackOutRun() {
+  constexpr int kFrames = 800;
+  const Artifact town = SyntheticTown("town2027_800", kFrames, 2027);
+  if (!town.ok()) return town;
+  const std::vector<std::string> compose = {"compose",
+                                            "--sequence",
+                                            SequenceDir(town.dir).string(),
+                                            "--frames",
+                                            "0-" + std::to_string(kFrames - 1),
+                                            "--black",
+                                            "750:770",
+                                            "-q"};
+  return ComposedRun("town2027_800_black750", compose, LookAlikeBlackOutRunArgs());
+}
+
 Artifact TinyDataset() { return SyntheticTown("city6", 6, 1); }
 
 Artifact MonoRun() {
