@@ -5,7 +5,8 @@
 //
 // Seed 200's town, 420 frames (356 m): the route's first block ends on the street it began with, and the
 // loop closer closes the loop there (then a global BA), with every keyframe and tracked frame segmented
-// (truth-noisy:0.25). Then KITTI 07, frames 0-159, monocular.
+// (truth-noisy:0.25). Then a monocular map that starts after a black-out, and KITTI 07, frames 0-159,
+// monocular.
 //
 // Measured (commit of this test; 2 cores shared with other builds, load 7-10): stereo 97 keyframes, the loop
 // at keyframe 95 with keyframe 11, 420 of 420 segmentations fused, 70 s of CPU per run; mono 110 keyframes,
