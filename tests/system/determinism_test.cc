@@ -105,7 +105,6 @@ TEST(SynchronousRunsAfterABlackOut, ANewMonocularMapGivesTheSameBytesTwice) {
   SEMSLAM_REQUIRE_BINARY();
   SEMSLAM_ASSERT_ARTIFACT(dir, LookAlikeBlackOutRun());
   std::vector<std::string> args = LookAlikeBlackOutRunArgs();
-  std::erase(args, "-q");
   args.insert(args.end(), {"--sequence", (dir / "sequence").string()});
   const nlohmann::json run = ExpectIdenticalRuns(args);
   ASSERT_TRUE(run.is_object());

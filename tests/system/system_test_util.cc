@@ -173,8 +173,7 @@ Artifact ComposedRun(const std::string& name, const std::vector<std::string>& co
 }
 
 std::vector<std::string> LookAlikeBlackOutRunArgs() {
-  return {
-      "run", "--mode", "mono", "--frames", "640:", "--pacing", "synchronous", "--segmenter", "none", "-q"};
+  return {"run", "--mode", "mono", "--frames", "640:", "--pacing", "synchronous", "--segmenter", "none"};
 }
 
 Artifact LookAlikeBlackOutRun() {
@@ -189,7 +188,9 @@ Artifact LookAlikeBlackOutRun() {
                                             "--black",
                                             "750:770",
                                             "-q"};
-  return ComposedRun("town2027_800_black750", compose, LookAlikeBlackOutRunArgs());
+  std::vector<std::string> run = LookAlikeBlackOutRunArgs();
+  run.push_back("-q");
+  return ComposedRun("town2027_800_black750", compose, run);
 }
 
 Artifact TinyDataset() { return SyntheticTown("city6", 6, 1); }

@@ -85,7 +85,7 @@ Artifact ComposedRun(const std::string& name, const std::vector<std::string>& co
 // Seed 2027's town, 800 frames, composed with frames 750-769 black; run monocular at synchronous pacing, no
 // segmenter, from frame 640: tracking is lost in the black-out and a new map starts at frame 770.
 Artifact LookAlikeBlackOutRun();
-// That run's arguments, without --sequence and --out.
+// That run's arguments, without --sequence, --out and -q.
 std::vector<std::string> LookAlikeBlackOutRunArgs();
 
 // The sequence folder of a synthetic dataset.
