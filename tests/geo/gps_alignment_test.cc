@@ -142,6 +142,55 @@ TEST(GpsAlignment, DegenerateAndTooFewSamples) {
   EXPECT_THROW(AlignMapToGps(line, bad), InvalidArgument);
 }
 
+// A straight drive: the fixes fix all but the roll about their line; the cameras' down axis sets it.
+TEST(GpsAlignment, AStraightDriveTakesItsRollFromTheCameras) {
+  // Cameras looking along the road (ENU: north-east, climbing 2 %), image rows level: down is -z.
+  const Eigen::Vector3d forward = Eigen::Vector3d(std::cos(0.6), std::sin(0.6), 0.0);
+  Eigen::Matrix3d enu_from_camera;
+  enu_from_camera.col(0) = forward.cross(Eigen::Vector3d::UnitZ());
+  enu_from_camera.col(1) = -Eigen::Vector3d::UnitZ();
+  enu_from_camera.col(2) = forward;
+  const Sim3d map_from_enu = kEnuFromMap.Inverse();
+  const Eigen::Vector3d camera_down = map_from_enu.rotation * (enu_from_camera * Eigen::Vector3d::UnitY());
+  std::mt19937 rng(7);
+  std::vector<GpsSample> samples;
+  for (int i = 0; i < 400; i += 30) {
+    const Eigen::Vector3d enu = static_cast<double>(i) * (forward + Eigen::Vector3d(0, 0, 0.02));
+    GpsSample s;
+    s.frame_index = static_cast<size_t>(i);
+    s.map_position = map_from_enu * enu;
+    s.enu = enu + Noise3(rng, 0.05);
+    s.sigma_m = 0.05;
+    s.camera_down = camera_down;
+    samples.push_back(s);
+  }
+  samples[5].enu += Eigen::Vector3d(30, -40, 0);  // one outlier
+  const auto result = AlignMapToGps(samples);
+  ASSERT_TRUE(result);
+  EXPECT_TRUE(result->roll_from_camera_down);
+  EXPECT_FALSE(result->inliers[5]);
+  EXPECT_EQ(result->num_inliers, static_cast<int>(samples.size()) - 1);
+  EXPECT_NEAR(result->enu_from_map.scale / kEnuFromMap.scale, 1.0, 0.002);
+  EXPECT_LT(result->enu_from_map.rotation.angularDistance(kEnuFromMap.rotation), 0.002);
+  EXPECT_LT(result->inlier_rmse_m, 0.15);
+
+  // Stereo: scale 1. Camera axes pointing every way, or the option off: no roll, no estimate.
+  std::vector<GpsSample> metric = samples;
+  for (GpsSample& s : metric)
+    s.map_position = kEnuFromMap.rotation.conjugate() * (s.enu - kEnuFromMap.translation);
+  GpsAlignmentOptions stereo;
+  stereo.estimate_scale = false;
+  const auto rigid = AlignMapToGps(metric, stereo);
+  ASSERT_TRUE(rigid);
+  EXPECT_DOUBLE_EQ(rigid->enu_from_map.scale, 1.0);
+  EXPECT_LT(rigid->enu_from_map.rotation.angularDistance(kEnuFromMap.rotation), 0.002);
+  GpsAlignmentOptions off;
+  off.roll_from_camera_down = false;
+  EXPECT_FALSE(AlignMapToGps(samples, off));
+  for (size_t i = 0; i < samples.size(); ++i) samples[i].camera_down *= i % 2 == 0 ? 1.0 : -1.0;
+  EXPECT_FALSE(AlignMapToGps(samples));
+}
+
 TEST(GpsAlignment, IncrementalReestimatesAsSamplesArrive) {
   const Case c = MakeCase(kEnuFromMap, 1.0, 0.05, 11);
   IncrementalGpsAligner aligner;

@@ -145,6 +145,50 @@ TEST(GpsFusion, MovesTheFixesByTheLeverArm) {
   EXPECT_LT(moved->inlier_rmse_m, 0.1);
 }
 
+// Fixes on one line leave the roll about it free: the cameras' down axis sets it, and the graph holds it
+// there. Free, the graph would turn about the line to swing the lever arm onto whatever the fixes do not
+// explain (here 15 cm of lever arm error sideways).
+TEST(GpsFusion, AStraightDriveTakesItsRollFromTheCameras) {
+  Drive d = MakeDrive(0.01, 0.0, 0.05, 0.05, 30, 0.0, 13, testing::StraightRoad());
+  const Eigen::Vector3d antenna(-0.3, 0.7, -1.1);  // left of, below and behind the camera (KITTI's)
+  const Eigen::Vector3d sideways(-std::sin(0.6), std::cos(0.6), 0.0);
+  std::mt19937 rng(5);
+  for (size_t k = 0; k < d.fixes.size(); ++k) {
+    d.fixes[k].position =
+        d.enu.ToWgs84(d.truth[k * 30] * antenna + 0.15 * sideways + testing::Noise3(rng, 0.05));
+  }
+  for (FramePose& f : d.frames) {  // the map's attitude noise: half a degree
+    const Eigen::Vector3d w = testing::Noise3(rng, 0.5 * std::numbers::pi / 180.0);
+    f.world_from_camera.rotation *= Eigen::Quaterniond(Eigen::AngleAxisd(w.norm(), w.normalized()));
+  }
+  GpsFusionOptions options;
+  options.antenna_in_camera_m = antenna;
+  // The angle between the keyframes' mean down axis in ENU and the true one.
+  const auto tilt_deg = [&](const GpsFusionResult& r, const GpsFusionInput& input) {
+    Eigen::Vector3d down = Eigen::Vector3d::Zero(), truth = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < input.keyframes.size(); ++i) {
+      down += r.keyframe_enu_from_camera[i].rotation * Eigen::Vector3d::UnitY();
+      truth += d.truth[input.keyframes[i].frame_index].rotation * Eigen::Vector3d::UnitY();
+    }
+    return std::acos(std::min(1.0, down.normalized().dot(truth.normalized()))) * 180.0 / std::numbers::pi;
+  };
+  const GpsFusionInput input = Input(d, 5);
+  const auto held = FuseGps(input, d.enu, options);
+  options.line_roll_sigma_rad = 1e3;
+  const auto free = FuseGps(input, d.enu, options);
+  ASSERT_TRUE(held && free);
+  EXPECT_TRUE(held->prealignment.roll_from_camera_down);
+  const double held_roll = tilt_deg(*held, input), free_roll = tilt_deg(*free, input);
+  std::printf("straight 400 m: cameras tilted %.2f deg held, %.2f deg free; ATE %.3f m\n", held_roll,
+              free_roll, AteEnu(d, held->georeference));
+  EXPECT_LT(held_roll, 0.5);
+  EXPECT_GT(free_roll, 5.0);
+  EXPECT_LT(AteEnu(d, held->georeference), 0.2);
+
+  options.alignment.roll_from_camera_down = false;
+  EXPECT_FALSE(FuseGps(input, d.enu, options));
+}
+
 // A monocular map's covisibility within one pass is measured from the map's own, drifted poses: counted
 // with its scale at every edge, it holds the drift against the fixes; as shape alone, the fixes correct it.
 TEST(GpsFusion, CovisibilityWithinOnePassLeavesTheScaleToTheChain) {

@@ -38,9 +38,19 @@ inline Eigen::Vector3d Noise3(std::mt19937& rng, double sigma) {
   return {n(rng), n(rng), n(rng)};
 }
 
-// A monocular drive: the true ENU trajectory of BlockLoop (1750 m, a frame per metre at 10 Hz), and the SLAM
-// map of it, which starts at the first camera (KITTI's world) at `map_scale` units per metre and drifts: its
-// scale grows by `scale_drift` per 100 m and its heading turns by `yaw_drift_deg` per 100 m.
+// 400 m straight north-east up a 2 % grade: every position on one line.
+inline Points3d StraightRoad() {
+  Points3d points;
+  for (int i = 0; i < 400; ++i) {
+    const double s = static_cast<double>(i);
+    points.emplace_back(s * std::cos(0.6), s * std::sin(0.6), 0.02 * s);
+  }
+  return points;
+}
+
+// A monocular drive: the true ENU trajectory of `route` (BlockLoop: 1750 m, a frame per metre at 10 Hz), and
+// the SLAM map of it, which starts at the first camera (KITTI's world) at `map_scale` units per metre and
+// drifts: its scale grows by `scale_drift` per 100 m and its heading turns by `yaw_drift_deg` per 100 m.
 struct Drive {
   Points3d truth_enu;             // camera centres, per frame
   std::vector<Rigid3d> truth;     // enu_from_camera, per frame
@@ -62,9 +72,10 @@ inline Rigid3d EnuFromCamera(const Eigen::Vector3d& position, const Eigen::Vecto
 }
 
 inline Drive MakeDrive(double scale_drift, double yaw_drift_deg, double map_scale, double gps_sigma,
-                       int gps_every, double outlier_fraction, unsigned seed) {
+                       int gps_every, double outlier_fraction, unsigned seed,
+                       const Points3d& route = BlockLoop()) {
   Drive d;
-  d.truth_enu = BlockLoop();
+  d.truth_enu = route;
   const size_t n = d.truth_enu.size();
   std::vector<Rigid3d>& truth = d.truth;
   truth.resize(n);

@@ -190,6 +190,9 @@ TEST(OptimJacobians, PositionPriors) {
     ExpectJacobiansMatch(*offset, {Packed(node)}, {&manifold});
     std::unique_ptr<ceres::CostFunction> framed(optim_internal::NewPositionPriorCost(target, 1.5, true));
     ExpectJacobiansMatch(*framed, {Packed(node), Packed(frame)}, {&manifold, &manifold});
+    std::unique_ptr<ceres::CostFunction> direction(optim_internal::NewDirectionPriorCost(
+        RandomVector(rng, 1.0).normalized(), RandomVector(rng, 1.0).normalized(), 0.05));
+    ExpectJacobiansMatch(*direction, {Packed(node)}, {&manifold});
   }
 }
 

@@ -325,6 +325,10 @@ TEST(PoseGraph, RejectsBadInput) {
   EXPECT_THROW(g.AddRelativeEdge(a, b, Sim3d(0.0, Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero())),
                InvalidArgument);
   EXPECT_THROW(g.AddPositionPrior(b, Eigen::Vector3d::Zero(), -1.0), InvalidArgument);
+  EXPECT_THROW(g.AddDirectionPrior(b, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), 0.1),
+               InvalidArgument);
+  EXPECT_THROW(g.AddDirectionPrior(b, Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), 0.0),
+               InvalidArgument);
   EXPECT_THROW(
       g.AddNode(Sim3d(1.0, Eigen::Quaterniond::Identity(), Eigen::Vector3d(std::nan(""), 0, 0)), false),
       InvalidArgument);

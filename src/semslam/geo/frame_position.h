@@ -19,6 +19,9 @@ struct FramePosition {
   Eigen::Vector3d map_position = Eigen::Vector3d::Zero();  // camera centre, map frame
   std::uint32_t segment =
       0;  // the drive it belongs to, of several one after another (a merged map's sessions)
+  // The camera's image-down axis (+y) in the map frame; zero when unknown. On a straight drive it gives the
+  // roll about the track that GPS fixes on one line leave free (see GpsAlignmentOptions).
+  Eigen::Vector3d camera_down = Eigen::Vector3d::Zero();
 };
 
 using FramePositions = std::vector<FramePosition>;
@@ -34,7 +37,9 @@ struct FramePose {
   std::uint32_t segment = 0;  // as FramePosition's
 
   FramePosition Position() const {
-    return FramePosition{frame_index, keyframe_id, timestamp, world_from_camera.translation, segment};
+    FramePosition position{frame_index, keyframe_id, timestamp, world_from_camera.translation, segment};
+    position.camera_down = world_from_camera.rotation * Eigen::Vector3d::UnitY();
+    return position;
   }
 };
 

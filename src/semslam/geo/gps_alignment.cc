@@ -42,6 +42,7 @@ GpsSample MakeSample(const FramePosition& frame, const std::vector<GpsFix>& fixe
   sample.enu = enu_frame.ToEnu(fixes[fix_index].position);
   sample.sigma_m = fixes[fix_index].sigma_m;
   sample.fix_index = fix_index;
+  sample.camera_down = frame.camera_down;
   return sample;
 }
 
@@ -88,6 +89,73 @@ double SpreadRatio(const Points3d& points) {
   return std::sqrt(std::max(eig(1), 0.0) / eig(2));
 }
 
+// Unit principal axis of the weighted points' scatter around `mean`.
+Eigen::Vector3d PrincipalAxis(const Points3d& points, const std::vector<double>& weights,
+                              const Eigen::Vector3d& mean) {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < points.size(); ++i)
+    scatter += weights[i] * (points[i] - mean) * (points[i] - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  return solver.eigenvectors().col(2);
+}
+
+// A right-handed frame whose first axis is `along` and whose second is `down` off it; nullopt when `down`
+// lies (nearly) along `along`.
+std::optional<Eigen::Matrix3d> LineFrame(const Eigen::Vector3d& along, const Eigen::Vector3d& down) {
+  constexpr double kMinSine = 0.3;  // down at least ~17 degrees off the line
+  const Eigen::Vector3d off = down - down.dot(along) * along;
+  if (!(off.norm() > kMinSine * down.norm())) return std::nullopt;
+  Eigen::Matrix3d frame;
+  frame.col(0) = along;
+  frame.col(1) = off.normalized();
+  frame.col(2) = along.cross(frame.col(1));
+  return frame;
+}
+
+// The similarity that lays the map positions' line onto the fixes' line (weighted least squares along it),
+// turned about it so that `map_down` comes nearest to the world's down (ENU: -z). Points on a line fix all
+// but that roll.
+std::optional<Sim3d> FitAlongLine(const Points3d& src, const Points3d& tgt, std::vector<double> weights,
+                                  const Eigen::Vector3d& map_down, bool estimate_scale) {
+  if (weights.empty()) weights.assign(src.size(), 1.0);
+  double total = 0.0;
+  Eigen::Vector3d src_mean = Eigen::Vector3d::Zero(), tgt_mean = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < src.size(); ++i) {
+    total += weights[i];
+    src_mean += weights[i] * src[i];
+    tgt_mean += weights[i] * tgt[i];
+  }
+  if (!(total > 0)) return std::nullopt;
+  src_mean /= total;
+  tgt_mean /= total;
+  const Eigen::Vector3d src_axis = PrincipalAxis(src, weights, src_mean);
+  Eigen::Vector3d tgt_axis = PrincipalAxis(tgt, weights, tgt_mean);
+  double cross = 0.0, src_var = 0.0;
+  for (size_t i = 0; i < src.size(); ++i) {
+    const double a = (src[i] - src_mean).dot(src_axis);
+    cross += weights[i] * a * (tgt[i] - tgt_mean).dot(tgt_axis);
+    src_var += weights[i] * a * a;
+  }
+  if (cross < 0) {
+    tgt_axis = -tgt_axis;
+    cross = -cross;
+  }
+  if (!(src_var > 0) || !(cross > 0)) return std::nullopt;
+  const auto src_frame = LineFrame(src_axis, map_down);
+  const auto tgt_frame = LineFrame(tgt_axis, -Eigen::Vector3d::UnitZ());
+  if (!src_frame || !tgt_frame) return std::nullopt;
+  const Eigen::Matrix3d rotation = *tgt_frame * src_frame->transpose();
+  const double scale = estimate_scale ? cross / src_var : 1.0;
+  return Sim3d(scale, Eigen::Quaterniond(rotation), tgt_mean - scale * (rotation * src_mean));
+}
+
+// The samples' mean camera down axis (zero when they carry none).
+Eigen::Vector3d MeanCameraDown(const std::vector<GpsSample>& samples) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const GpsSample& s : samples) sum += s.camera_down;
+  return samples.empty() ? sum : sum / static_cast<double>(samples.size());
+}
+
 }  // namespace
 
 std::vector<GpsSample> SampleGpsPairs(const std::vector<FramePosition>& frames,
@@ -116,6 +184,13 @@ std::optional<GpsSample> GpsSampler::AddFrame(const FramePosition& frame) {
   const size_t n = static_cast<size_t>(options_.every_n_frames);
   next_frame_ = (frame.frame_index / n + 1) * n;
   return MakeSample(frame, fixes_, *match, enu_frame_);
+}
+
+std::optional<Sim3d> AlignAlongLine(const Points3d& map, const Points3d& enu, const Eigen::Vector3d& map_down,
+                                    bool estimate_scale) {
+  Require(map.size() == enu.size(), "AlignAlongLine: map and ENU positions differ in number");
+  if (map.size() < 2) return std::nullopt;
+  return FitAlongLine(map, enu, {}, map_down, estimate_scale);
 }
 
 GpsAlignment EvaluateAlignment(const Sim3d& enu_from_map, const std::vector<GpsSample>& samples,
@@ -159,23 +234,34 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
   }
 
   // Nearly collinear map positions leave the roll about their line undetermined (a straight drive with a
-  // gentle grade is not "exactly" collinear, so Umeyama alone would return an arbitrary roll).
-  if (SpreadRatio(src) < options.min_spread_ratio) return std::nullopt;
+  // gentle grade is not "exactly" collinear, so Umeyama alone would return an arbitrary roll); the cameras'
+  // down axis, where the samples carry it, sets that roll.
+  const Eigen::Vector3d map_down = MeanCameraDown(samples);
+  // Unit axes that agree give a mean near unit length; a mean of axes pointing every way is no axis.
+  constexpr double kMinDownAgreement = 0.5;
+  const bool down_known = options.roll_from_camera_down && map_down.norm() > kMinDownAgreement;
+  bool along_line = SpreadRatio(src) < options.min_spread_ratio;
+  if (along_line && !down_known) return std::nullopt;
+  const auto fit = [&](const Points3d& s, const Points3d& t, const std::vector<double>& w) {
+    return along_line ? FitAlongLine(s, t, w, map_down, options.estimate_scale)
+                      : Fit(s, t, w, options.estimate_scale);
+  };
 
-  // RANSAC (MSAC scoring) over minimal triples.
+  // RANSAC (MSAC scoring) over minimal sets: triples, or pairs along a line.
   std::optional<Sim3d> best;
-  double best_cost = std::numeric_limits<double>::infinity();
-  if (options.ransac_iterations > 0) {
+  const auto ransac = [&] {
+    double best_cost = std::numeric_limits<double>::infinity();
     std::mt19937_64 rng(options.seed);
     std::uniform_int_distribution<size_t> pick(0, n - 1);
     for (int iteration = 0; iteration < options.ransac_iterations; ++iteration) {
-      const size_t a = pick(rng), b = pick(rng), c = pick(rng);
-      if (a == b || a == c || b == c) continue;
-      if (TriangleSine(src[a], src[b], src[c]) < options.min_triangle_sine ||
-          TriangleSine(tgt[a], tgt[b], tgt[c]) < options.min_triangle_sine) {
+      const size_t a = pick(rng), b = pick(rng), c = along_line ? a : pick(rng);
+      if (a == b || (!along_line && (a == c || b == c))) continue;
+      if (!along_line && (TriangleSine(src[a], src[b], src[c]) < options.min_triangle_sine ||
+                          TriangleSine(tgt[a], tgt[b], tgt[c]) < options.min_triangle_sine)) {
         continue;
       }
-      const auto model = Fit({src[a], src[b], src[c]}, {tgt[a], tgt[b], tgt[c]}, {}, options.estimate_scale);
+      const auto model = along_line ? fit({src[a], src[b]}, {tgt[a], tgt[b]}, {})
+                                    : fit({src[a], src[b], src[c]}, {tgt[a], tgt[b], tgt[c]}, {});
       if (!model) continue;
       double cost = 0.0;
       for (size_t i = 0; i < n; ++i) {
@@ -188,10 +274,17 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
         best = model;
       }
     }
+  };
+  if (options.ransac_iterations > 0) {
+    ransac();
+    // Every minimal triple degenerate: the positions lie nearly on one line (a straight drive so far).
+    if (!best && !along_line && down_known) {
+      along_line = true;
+      ransac();
+    }
+    if (!best) return std::nullopt;
   }
-  // Every minimal triple degenerate: the positions lie nearly on one line (a straight drive so far).
-  if (options.ransac_iterations > 0 && !best) return std::nullopt;
-  if (!best) best = Fit(src, tgt, base_weight, options.estimate_scale);
+  if (!best) best = fit(src, tgt, base_weight);
   if (!best) return std::nullopt;
 
   // Refit on the inliers, then reweight (Cauchy) and re-select until the inlier set settles.
@@ -203,7 +296,7 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
       const double u = current.residuals_m[i] / (options.cauchy_scale * samples[i].sigma_m);
       weights[i] = base_weight[i] * (iteration == 0 ? 1.0 : 1.0 / (1.0 + u * u));
     }
-    const auto refit = Fit(src, tgt, weights, options.estimate_scale);
+    const auto refit = fit(src, tgt, weights);
     if (!refit) break;
     GpsAlignment next = EvaluateAlignment(*refit, samples, options);
     const bool settled = next.inliers == current.inliers &&
@@ -213,6 +306,7 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
     if (settled && iteration > 0) break;
   }
   if (current.num_inliers < 3) return std::nullopt;
+  current.roll_from_camera_down = along_line;
   return current;
 }
 

@@ -2,7 +2,8 @@
 // Tying the SLAM map to the world (paper §III-C): (GPS, keyframe position) pairs sampled every N frames, and
 // the similarity `enu_from_map` (Umeyama; SE(3) for metric stereo maps) that maps keyframe positions onto
 // the fixes, robust to outlier fixes (RANSAC over minimal triples, then iteratively reweighted least squares
-// with a Cauchy loss), re-estimated as samples arrive.
+// with a Cauchy loss), re-estimated as samples arrive. Fixes on one line (a straight drive) leave the roll
+// about it free: the cameras' down axis then sets it.
 
 #include <cstddef>
 #include <cstdint>
@@ -24,6 +25,7 @@ struct GpsSample {
   Eigen::Vector3d enu = Eigen::Vector3d::Zero();  // the matched fix in the ENU frame
   double sigma_m = 1.0;
   size_t fix_index = 0;  // into the GpsLog's fixes
+  Eigen::Vector3d camera_down = Eigen::Vector3d::Zero();  // the frame's (FramePosition::camera_down)
 };
 
 struct GpsSamplingOptions {
@@ -78,8 +80,12 @@ struct GpsAlignmentOptions {
   // Minimal triples whose smallest angle's sine is below this are degenerate (nearly collinear) and skipped.
   double min_triangle_sine = 0.05;
   // Map positions whose scatter's second principal axis is shorter than this fraction of the first are
-  // (nearly) on one line: no estimate.
+  // (nearly) on one line.
   double min_spread_ratio = 0.01;
+  // Positions on one line are placed along the line of the fixes, with the roll about it that turns the
+  // samples' mean camera down axis (GpsSample::camera_down) nearest to the world's down: a car's camera
+  // keeps its image rows level within the road's bank, a few degrees. False, or no camera axes: no estimate.
+  bool roll_from_camera_down = true;
   std::uint64_t seed = 1;
 
   void Check() const;
@@ -92,13 +98,19 @@ struct GpsAlignment {
   int num_inliers = 0;
   double inlier_rmse_m = 0.0;
   double rmse_m = 0.0;  // over all samples
+  bool roll_from_camera_down = false;  // the positions lay on one line: the cameras set the roll about it
 };
 
 // Robust alignment; nullopt with fewer than min_samples samples, or when the positions are nearly on one line
 // (min_spread_ratio, or no minimal triple passes min_triangle_sine: a straight drive leaves the roll about it
-// undetermined).
+// undetermined) and the samples carry no camera axes to set it (roll_from_camera_down).
 std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
                                           const GpsAlignmentOptions& options = {});
+// The similarity (scale 1 without estimate_scale) that lays map positions on (nearly) one line onto the ENU
+// positions' line, least squares along it, turned about it so that `map_down` (a camera down axis in the map
+// frame) comes nearest to the world's down; nullopt when degenerate (a point, or down along the line).
+std::optional<Sim3d> AlignAlongLine(const Points3d& map, const Points3d& enu, const Eigen::Vector3d& map_down,
+                                    bool estimate_scale);
 // Residuals and their statistics of a given transform (inlier flags: the threshold rule above).
 GpsAlignment EvaluateAlignment(const Sim3d& enu_from_map, const std::vector<GpsSample>& samples,
                                const GpsAlignmentOptions& options = {});

@@ -23,6 +23,8 @@ void GpsFusionOptions::Check() const {
           "GPS fusion log_scale_sigma_per_sqrt_m must be positive");
   Require(std::isfinite(prior_loss_scale) && prior_loss_scale > 0,
           "GPS fusion prior_loss_scale must be positive");
+  Require(std::isfinite(line_roll_sigma_rad) && line_roll_sigma_rad > 0,
+          "GPS fusion line_roll_sigma_rad must be positive");
   Require(std::isfinite(outlier_sigma) && outlier_sigma > 0, "GPS fusion outlier_sigma must be positive");
   Require(max_rounds >= 1, "GPS fusion max_rounds must be >= 1");
   Require(max_iterations >= 1, "GPS fusion max_iterations must be >= 1");
@@ -169,6 +171,11 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
       Georeference(enu_frame, enu_from_map), *prealignment, samples, {}, {}, 0, 0.0, {}, 0, {}};
   std::vector<Sim3d> fused(nodes.size());
   for (size_t i = 0; i < nodes.size(); ++i) fused[i] = enu_from_map * Sim3d(nodes[i].world_from_camera);
+  const bool along_line = prealignment->roll_from_camera_down;
+  std::vector<Eigen::Vector3d> down_targets;
+  if (along_line) {
+    for (const Sim3d& f : fused) down_targets.push_back(f.rotation * Eigen::Vector3d::UnitY());
+  }
   const auto antenna_residuals = [&] {
     std::vector<double> residuals(samples.size());
     for (size_t s = 0; s < samples.size(); ++s) {
@@ -200,6 +207,10 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
       graph.AddRelativeEdge(
           e.a, e.b, e.a_from_b,
           e.weight * PoseGraph::EdgeInformation(sigma_t, options.rotation_sigma_rad, sigma_s));
+    }
+    for (size_t i = 0; i < down_targets.size(); ++i) {
+      graph.AddDirectionPrior(static_cast<int>(i), Eigen::Vector3d::UnitY(), down_targets[i],
+                              options.line_roll_sigma_rad);
     }
     for (size_t s = 0; s < samples.size(); ++s) {
       if (active[s]) {
@@ -253,7 +264,11 @@ std::optional<GpsFusionResult> FuseGps(const GpsFusionInput& input, const EnuFra
     enu_positions.push_back(fused[i].translation);
   }
   std::optional<Sim3d> global;
-  if (fix_scale) {
+  if (along_line) {
+    Eigen::Vector3d map_down = Eigen::Vector3d::Zero();
+    for (const FramePose& n : nodes) map_down += n.world_from_camera.rotation * Eigen::Vector3d::UnitY();
+    global = AlignAlongLine(map_positions, enu_positions, map_down, !fix_scale);
+  } else if (fix_scale) {
     if (const auto rigid = AlignRigid3(map_positions, enu_positions)) global = Sim3d(*rigid);
   } else {
     global = AlignSim3(map_positions, enu_positions);

@@ -33,6 +33,10 @@ ceres::CostFunction* NewRelativeSim3Cost(const Sim3d& a_from_b,
 // Pose graph: parameter world_from_node, and prior_from_graph when `framed`.
 ceres::CostFunction* NewPositionPriorCost(const Eigen::Vector3d& target, double sigma, bool framed,
                                           const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
+// (R * axis - target) / sigma of a Sim(3) node: the direction of the node's axis
+// (PoseGraph::AddDirectionPrior).
+ceres::CostFunction* NewDirectionPriorCost(const Eigen::Vector3d& axis, const Eigen::Vector3d& target,
+                                           double sigma);
 
 // Sim(3) refinement: parameter camera1_from_camera2 (Sim3RightManifold). into_camera1: `point` is in camera
 // 2's frame and `pixel` in image 1; otherwise `point` is in camera 1's frame and `pixel` in image 2.

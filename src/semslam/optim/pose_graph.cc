@@ -135,6 +135,30 @@ class PositionPriorCost final : public ceres::SizedCostFunction<3, kSim3Size> {
   Eigen::Vector3d offset_;
 };
 
+// (R * axis - target) / sigma: the direction of a node's axis. Under the right perturbation Exp(phi) the
+// axis moves by -R [axis]x phi.
+class DirectionPriorCost final : public ceres::SizedCostFunction<3, kSim3Size> {
+ public:
+  DirectionPriorCost(const Eigen::Vector3d& axis, const Eigen::Vector3d& target, double sigma)
+      : axis_(axis), target_(target), inv_sigma_(1.0 / sigma) {}
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Sim3View n(parameters[0]);
+    const Eigen::Matrix3d r = n.q.toRotationMatrix();
+    Eigen::Map<Eigen::Vector3d>{residuals} = inv_sigma_ * (r * axis_ - target_);
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      Eigen::Map<RowMajor3x8> j(jacobians[0]);
+      j.setZero();
+      j.block<3, 3>(0, 3) = -inv_sigma_ * r * SkewSymmetric(axis_);
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d axis_, target_;
+  double inv_sigma_;
+};
+
 // (prior_from_graph * centre - target) / sigma, with prior_from_graph a parameter too.
 class FramedPositionPriorCost final : public ceres::SizedCostFunction<3, kSim3Size, kSim3Size> {
  public:
@@ -171,6 +195,11 @@ class FramedPositionPriorCost final : public ceres::SizedCostFunction<3, kSim3Si
 ceres::CostFunction* optim_internal::NewRelativeSim3Cost(
     const Sim3d& a_from_b, const Eigen::Matrix<double, 7, 7>& sqrt_information) {
   return new RelativeSim3Cost(a_from_b, sqrt_information);
+}
+
+ceres::CostFunction* optim_internal::NewDirectionPriorCost(const Eigen::Vector3d& axis,
+                                                           const Eigen::Vector3d& target, double sigma) {
+  return new DirectionPriorCost(axis, target, sigma);
 }
 
 ceres::CostFunction* optim_internal::NewPositionPriorCost(const Eigen::Vector3d& target, double sigma,
@@ -236,6 +265,17 @@ int PoseGraph::AddPositionPrior(int node, const Eigen::Vector3d& target_position
   return static_cast<int>(priors_.size()) - 1;
 }
 
+void PoseGraph::AddDirectionPrior(int node, const Eigen::Vector3d& axis_in_node,
+                                  const Eigen::Vector3d& target_direction, double sigma_rad) {
+  CheckNode(node, "AddDirectionPrior");
+  Require(axis_in_node.allFinite() && target_direction.allFinite() && axis_in_node.norm() > 0 &&
+              target_direction.norm() > 0,
+          "pose graph: AddDirectionPrior: axis and target must be finite and non-zero");
+  Require(std::isfinite(sigma_rad) && sigma_rad > 0,
+          "pose graph: AddDirectionPrior: sigma_rad must be positive");
+  direction_priors_.push_back({node, axis_in_node.normalized(), target_direction.normalized(), sigma_rad});
+}
+
 void PoseGraph::EstimatePriorFrame(const Sim3d& initial_prior_from_graph, bool fix_scale) {
   Require(FiniteSim3(initial_prior_from_graph), "pose graph: EstimatePriorFrame: transform must be finite");
   estimate_prior_frame_ = true;
@@ -268,7 +308,7 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
               std::all_of(priors_.begin(), priors_.end(), [](const Prior& p) { return p.offset.isZero(); }),
           "pose graph: Optimize: priors with an offset are not supported in an estimated prior frame");
   PoseGraphSummary out;
-  if (edges_.empty() && priors_.empty()) return out;
+  if (edges_.empty() && priors_.empty() && direction_priors_.empty()) return out;
 
   std::vector<double> params(nodes_.size() * kSim3Size);
   for (size_t i = 0; i < nodes_.size(); ++i)
@@ -304,6 +344,10 @@ PoseGraphSummary PoseGraph::Optimize(const PoseGraphOptions& options) {
     } else {
       problem.AddResidualBlock(new PositionPriorCost(p.target, p.sigma, p.offset), loss, node);
     }
+  }
+  for (const DirectionPrior& p : direction_priors_) {
+    problem.AddResidualBlock(new DirectionPriorCost(p.axis, p.target, p.sigma), nullptr,
+                             &params[static_cast<size_t>(p.node) * kSim3Size]);
   }
 
   ceres::Solver::Options solver_options;

@@ -75,6 +75,11 @@ class PoseGraph {
   // the nodes is only as firm as the edges at the fixed node(s); the composition prior_from_graph *
   // world_from_node is what the priors determine.
   void EstimatePriorFrame(const Sim3d& initial_prior_from_graph, bool fix_scale);
+  // Absolute constraint on the direction of a node's axis (e.g. a camera's down axis): world_from_node's
+  // rotation * axis_in_node towards target_direction (unit vectors), standard deviation sigma_rad, quadratic.
+  // Holds a rotation the other constraints leave free (the roll about a straight drive's GPS line).
+  void AddDirectionPrior(int node, const Eigen::Vector3d& axis_in_node,
+                         const Eigen::Vector3d& target_direction, double sigma_rad);
 
   // Throws InvalidArgument on bad options or a graph without any anchor (no fixed node and no prior).
   PoseGraphSummary Optimize(const PoseGraphOptions& options = {});
@@ -106,11 +111,18 @@ class PoseGraph {
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   };
 
+  struct DirectionPrior {
+    int node = 0;
+    Eigen::Vector3d axis = Eigen::Vector3d::UnitZ(), target = Eigen::Vector3d::UnitZ();
+    double sigma = 1.0;
+  };
+
   void CheckNode(int index, const char* who) const;
 
   std::vector<Node> nodes_;
   std::vector<Edge> edges_;
   std::vector<Prior> priors_;
+  std::vector<DirectionPrior> direction_priors_;
   bool estimate_prior_frame_ = false;
   bool prior_frame_fix_scale_ = false;
   Sim3d prior_from_graph_;

@@ -68,6 +68,7 @@ std::optional<Placement> PlaceMap(const std::vector<FramePose>& frames,
   }
   summary.samples = static_cast<int>(summary.gps_samples.size());
   summary.single_similarity_rmse_m = alignment->inlier_rmse_m;
+  summary.roll_from_cameras = alignment->roll_from_camera_down;
   for (const FramePose& f : frames) {
     summary.single_similarity_frames.emplace_back(f.frame_index,
                                                   alignment->enu_from_map * f.world_from_camera.translation);
@@ -119,7 +120,7 @@ AtlasGeoreference GeoreferenceAtlas(SlamSystem& slam, const GpsLog& log,
       m.reason =
           m.samples < fusion.alignment.min_samples
               ? fmt::format("{} fixes on its frames, {} needed", m.samples, fusion.alignment.min_samples)
-              : "its fixes lie on one line: they leave its roll free";
+              : "its fixes lie on one line and its cameras give no down axis: they leave its roll free";
       spdlog::info("map {} stays out of the world: {}", map_id, m.reason);
       continue;
     }
@@ -128,8 +129,10 @@ AtlasGeoreference GeoreferenceAtlas(SlamSystem& slam, const GpsLog& log,
       MoveMapIntoWorld(slam.map(), map_id, placement->world_from_keyframe, placement->world_from_map);
     }
     m.in_world = true;
-    spdlog::info("map {} is in the world: {} of {} fixes kept, {:.2f} m RMSE (one similarity: {:.2f} m)",
-                 map_id, m.inliers, m.samples, m.fit_rmse_m, m.single_similarity_rmse_m);
+    spdlog::info(
+        "map {} is in the world: {} of {} fixes kept, {:.2f} m RMSE (one similarity: {:.2f} m){}", map_id,
+        m.inliers, m.samples, m.fit_rmse_m, m.single_similarity_rmse_m,
+        m.roll_from_cameras ? "; its fixes lie on one line, the roll about it from its cameras" : "");
   }
 
   // Maps in the world share its frame: the largest takes the others in.

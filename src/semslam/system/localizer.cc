@@ -85,7 +85,8 @@ std::map<std::uint32_t, Georeference> SessionGeoreferences(const std::vector<Loc
   for (const LocalizedFrame& f : localized) {
     times.push_back(f.timestamp);
     if (file.Of(f.map_id) == nullptr) {
-      frames[f.map_id].push_back({f.frame, -1, f.timestamp, f.world_from_camera.translation});
+      frames[f.map_id].push_back({f.frame, -1, f.timestamp, f.world_from_camera.translation, 0,
+                                  f.world_from_camera.rotation * Eigen::Vector3d::UnitY()});
     }
   }
   const EnuFrame enu = file.maps.empty() ? MakeEnuFrame(log) : file.maps.begin()->second.enu_frame;

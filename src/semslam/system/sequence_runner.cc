@@ -254,6 +254,7 @@ nlohmann::json MapsInTheWorldJson(const AtlasGeoreference& atlas) {
                             {"single_similarity_rmse_m", m.single_similarity_rmse_m},
                             {"in_world", m.in_world}};
     if (!m.in_world) entry["reason"] = m.reason;
+    if (m.roll_from_cameras) entry["roll_from_cameras"] = true;
     if (m.joined_into) entry["joined_into"] = *m.joined_into;
     maps.push_back(std::move(entry));
   }
