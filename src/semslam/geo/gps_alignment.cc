@@ -29,6 +29,8 @@ void GpsAlignmentOptions::Check() const {
   Require(std::isfinite(cauchy_scale) && cauchy_scale > 0, "GPS cauchy_scale must be positive");
   Require(min_triangle_sine >= 0 && min_triangle_sine < 1, "GPS min_triangle_sine must be in [0, 1)");
   Require(min_spread_ratio >= 0 && min_spread_ratio < 1, "GPS min_spread_ratio must be in [0, 1)");
+  Require(std::isfinite(min_roll_spread_sigmas) && min_roll_spread_sigmas >= 0,
+          "GPS min_roll_spread_sigmas must be >= 0");
 }
 
 namespace {
@@ -75,18 +77,32 @@ double TriangleSine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   return middle > 0 ? area2 / (longest * middle) : 0.0;
 }
 
-// sqrt(second / largest eigenvalue) of the points' scatter: 0 on a line, 1 for an isotropic spread.
-double SpreadRatio(const Points3d& points) {
-  if (points.size() < 2) return 0.0;
+// Eigenvalues (ascending) of the points' scatter about their mean, per point.
+Eigen::Vector3d ScatterEigenvalues(const Points3d& points) {
+  if (points.size() < 2) return Eigen::Vector3d::Zero();
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& p : points) mean += p;
   mean /= static_cast<double>(points.size());
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (const Eigen::Vector3d& p : points) scatter += (p - mean) * (p - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter, Eigen::EigenvaluesOnly);
-  const Eigen::Vector3d eig = solver.eigenvalues();  // ascending
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter / static_cast<double>(points.size()),
+                                                              Eigen::EigenvaluesOnly);
+  return solver.eigenvalues().cwiseMax(0.0);
+}
+
+// sqrt(second / largest eigenvalue) of the points' scatter: 0 on a line, 1 for an isotropic spread.
+double SpreadRatio(const Points3d& points) {
+  const Eigen::Vector3d eig = ScatterEigenvalues(points);
   if (!(eig(2) > 0)) return 0.0;
-  return std::sqrt(std::max(eig(1), 0.0) / eig(2));
+  return std::sqrt(eig(1) / eig(2));
+}
+
+// RMS distance of the map positions from their principal line, in the fixes' metres (the scale from the
+// spreads along the lines: the map's own for a metric map).
+double AcrossLineSpreadMetres(const Points3d& map, const Points3d& enu, bool estimate_scale) {
+  const Eigen::Vector3d map_eig = ScatterEigenvalues(map), enu_eig = ScatterEigenvalues(enu);
+  const double scale = !estimate_scale ? 1.0 : map_eig(2) > 0 ? std::sqrt(enu_eig(2) / map_eig(2)) : 0.0;
+  return scale * std::sqrt(map_eig(0) + map_eig(1));
 }
 
 // Unit principal axis of the weighted points' scatter around `mean`.
@@ -242,6 +258,12 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
   const bool down_known = options.roll_from_camera_down && map_down.norm() > kMinDownAgreement;
   bool along_line = SpreadRatio(src) < options.min_spread_ratio;
   if (along_line && !down_known) return std::nullopt;
+  if (!along_line && down_known) {
+    std::vector<double> sigmas;
+    for (const GpsSample& s : samples) sigmas.push_back(s.sigma_m);
+    along_line = AcrossLineSpreadMetres(src, tgt, options.estimate_scale) <
+                 options.min_roll_spread_sigmas * Median(sigmas);
+  }
   const auto fit = [&](const Points3d& s, const Points3d& t, const std::vector<double>& w) {
     return along_line ? FitAlongLine(s, t, w, map_down, options.estimate_scale)
                       : Fit(s, t, w, options.estimate_scale);

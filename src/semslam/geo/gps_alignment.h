@@ -86,6 +86,9 @@ struct GpsAlignmentOptions {
   // samples' mean camera down axis (GpsSample::camera_down) nearest to the world's down: a car's camera
   // keeps its image rows level within the road's bank, a few degrees. False, or no camera axes: no estimate.
   bool roll_from_camera_down = true;
+  // So are positions whose spread across their line (metres, RMS) is under this many fix sigmas (median):
+  // a nearly straight road's bow in noisy fixes turns the roll that Umeyama finds by tens of degrees.
+  double min_roll_spread_sigmas = 5.0;
   std::uint64_t seed = 1;
 
   void Check() const;
