@@ -25,7 +25,9 @@ DnnSegmenter::DnnSegmenter(ModelCard card, Options options)
   card_.Check();
   options_.Check();
   if (!std::filesystem::is_regular_file(card_.file)) {
-    throw InputError(card_.file, "model file not found (model card '" + card_.name + "')");
+    throw InputError(card_.file,
+                     "model file not found (model card '" + card_.name +
+                         "'; SEMSLAM_SHARED_DATA names the folder holding segmentation_weights/)");
   }
   try {
     switch (card_.ResolvedFormat()) {

@@ -61,9 +61,19 @@ double ParseNumber(const std::string& text, const std::string& what) {
 
 std::filesystem::path DefaultSegmentationWeightsDir() {
   const char* shared = std::getenv("SEMSLAM_SHARED_DATA");
-  const std::filesystem::path data = shared != nullptr && *shared != '\0' ? std::filesystem::path(shared)
-                                                                          : std::filesystem::path("../shared/data");
-  return data / "segmentation_weights";
+  if (shared != nullptr && *shared != '\0') return std::filesystem::path(shared) / "segmentation_weights";
+  const std::filesystem::path beside_cwd = std::filesystem::path("../shared/data/segmentation_weights");
+  if (std::filesystem::is_directory(beside_cwd)) return beside_cwd;
+  // Run from elsewhere, a binary of the build tree (CHECKOUT/build/PRESET/bin) still finds the data beside
+  // its checkout.
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const std::filesystem::path beside_checkout =
+        (exe.parent_path() / "../../../../shared/data/segmentation_weights").lexically_normal();
+    if (std::filesystem::is_directory(beside_checkout)) return beside_checkout;
+  }
+  return beside_cwd;
 }
 
 std::unique_ptr<Segmenter> MakeSegmenter(std::string_view spec, const SegmenterContext& context) {

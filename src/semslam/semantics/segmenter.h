@@ -46,8 +46,10 @@ struct SegmenterContext {
   bool colour_images = false;
 };
 
-// The folder `auto` reads the weights from when its spec names none: $SEMSLAM_SHARED_DATA/segmentation_weights,
-// else ../shared/data/segmentation_weights (the checkout's sibling, from the repository root).
+// The folder `auto` reads the weights from when its spec names none:
+// $SEMSLAM_SHARED_DATA/segmentation_weights, else ../shared/data/segmentation_weights (the checkout's
+// sibling, from the repository root), else the same beside the checkout of a build-tree binary
+// (CHECKOUT/build/PRESET/bin/semslam) run from elsewhere.
 std::filesystem::path DefaultSegmentationWeightsDir();
 
 // Builds a segmenter from a spec:
