@@ -216,6 +216,23 @@ def find_long_drive(folder, kml=None, osm=None):
             "osm": beside(KITTI00_OSM, osm, "KITTI 00 OpenStreetMap extract (%s)" % KITTI00_OSM)}
 
 
+KITTI04_KML = "RTK_GPS_kitti_04.kml"
+KITTI04_OSM = "kitti_04.osm"
+
+
+def straight_drive(ctx):
+    """KITTI 04 (271 frames, 394 m nearly straight: the GPS fixes lie on one line) from the long drive's dataset
+    folder, its RTK track and OpenStreetMap extract beside KITTI 00's. KITTI 04 was never tuned on."""
+    found = long_drive(ctx)
+    dataset = os.path.dirname(os.path.dirname(found["sequence"]))
+    maps = os.path.dirname(found["rtk"])
+    return {"sequence": require(os.path.join(dataset, "sequences", "04"), "KITTI 04 (beside KITTI 00)"),
+            "poses": require(os.path.join(dataset, "poses", "04.txt"), "KITTI 04 poses"),
+            "rtk": require(os.path.join(maps, KITTI04_KML), "KITTI 04 RTK track (beside KITTI 00's)"),
+            "osm": require(os.path.join(os.path.dirname(found["osm"]), KITTI04_OSM),
+                           "KITTI 04 OpenStreetMap extract (beside KITTI 00's)")}
+
+
 def long_drive(ctx):
     if not ctx.long_dir:
         raise Skip("no long-drive folder (--long-drive DIR or SEMSLAM_LONG_DRIVE)")
@@ -286,6 +303,23 @@ def wgs84_against_rtk(ctx, prepared, wgs84_csv):
     if not result.get("frames"):
         raise RunFailed("wgs84_against_rtk.py: no row of %s matched a frame of times.txt" % wgs84_csv)
     return result
+
+
+def straight_geo(ctx, prepared, run_dir):
+    """KITTI 04's WGS84 against its RTK track, and its landmarks' nearest keyframes."""
+    wgs84 = os.path.join(run_dir, "trajectory_wgs84.csv")
+    run = read_json(os.path.join(run_dir, "run.json"))
+    rows = bench_geo.count_csv_rows(wgs84) if os.path.exists(wgs84) else 0
+    out = {"wgs84_missing": (run.get("with_pose") or 0) - rows}
+    if rows:
+        out["wgs84_rmse_m"] = wgs84_against_rtk(ctx, prepared, wgs84)["rmse_m"]
+    geojson = os.path.join(run_dir, "landmarks.geojson")
+    if os.path.exists(geojson):
+        considered, right, _ = bench_geo.landmarks_with_right_keyframe(
+            bench_geo.read_geojson_features(geojson), bench_geo.read_kml_track(prepared["rtk"]))
+        out["landmarks_placed"] = considered
+        out["landmarks_right"] = right
+    return out
 
 
 def kitti00_geo(ctx, prepared, run_dir):
@@ -565,7 +599,23 @@ def long_cases():
         lambda p: ["--mode", "mono", "--frames", LONG_DRIVE_FRAMES, "--gps", p["rtk"], "--gps-every", "30",
                    "--landmarks", p["osm"], "--gps-lever-arm=" + KITTI00_LEVER_ARM],
         gps_figures, 185, variants={"synchronous": 1, "quiet": None, "busy": 0}, more=kitti00_geo, sync_seconds=130)
-    return [mono, gps]
+    # Held out: a straight drive, whose fixes lie on one line.
+    straight = slam_case("kitti04_mono", "long", "KITTI 04 (271 frames, 394 m straight), mono", straight_drive,
+                         ["--mode", "mono"],
+                         {"frames_in_one_map": with_bars(figures["frames_in_one_map"]), "ate_m": ATE,
+                          "keyframes_per_100": KEYFRAMES, "tracking_ms": TRACKING}, 30, sync_seconds=12)
+    straight_gps = slam_case(
+        "kitti04_gps", "long", "KITTI 04, mono, RTK GPS every 30 frames (on one line), kitti_04.osm as landmarks",
+        straight_drive,
+        lambda p: ["--mode", "mono", "--gps", p["rtk"], "--gps-every", "30", "--landmarks", p["osm"],
+                   "--gps-lever-arm=" + KITTI00_LEVER_ARM],
+        {"wgs84_missing": gps_figures["wgs84_missing"],
+         "wgs84_rmse_m": spec("WGS84 against the RTK track (RMSE)", "m", "lower", digits=2),
+         "landmarks_placed": spec("landmarks placed", "", None, digits=0),
+         "landmarks_right": spec("landmarks with the right nearest keyframe (±%d frames)" %
+                                 bench_geo.RIGHT_KEYFRAME_FRAMES, "", "higher", digits=0)},
+        31, variants={"synchronous": 1, "quiet": None, "busy": 0}, more=straight_geo, sync_seconds=13)
+    return [mono, gps, straight, straight_gps]
 
 
 def first_output_case(dry_run):
