@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <charconv>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <span>
 
@@ -79,6 +80,10 @@ size_t CheckFrameRange(const ImageSequence& sequence, size_t first, size_t end, 
   if (stereo && !sequence.stereo()) {
     throw InputError(sequence.directory(),
                      "stereo mode needs a second camera (image_1/ and P1 in calib.txt)");
+  }
+  if (end != std::numeric_limits<size_t>::max() && end > clamped) {
+    spdlog::warn("{}: frames {}:{} reach past the sequence's {} frames: frames {}..{} are used", command,
+                 first, end, sequence.size(), first, clamped - 1);
   }
   return clamped;
 }
