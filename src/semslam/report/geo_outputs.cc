@@ -228,7 +228,7 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
     if (!out.georeference) {
       spdlog::warn(
           "GPS: {} fixes did not determine the map's place in the world (too few samples every {} frames, "
-          "or all on one straight line); no WGS84 outputs",
+          "or all on one line with no level camera to set the roll about it); no WGS84 outputs",
           log->fixes.size(), fusion_options.sampling.every_n_frames);
     }
   }

@@ -120,7 +120,8 @@ AtlasGeoreference GeoreferenceAtlas(SlamSystem& slam, const GpsLog& log,
       m.reason =
           m.samples < fusion.alignment.min_samples
               ? fmt::format("{} fixes on its frames, {} needed", m.samples, fusion.alignment.min_samples)
-              : "its fixes lie on one line and its cameras give no down axis: they leave its roll free";
+              : "its fixes do not place it (on one line with no level camera to set the roll about it, "
+                "or fewer than 3 agree)";
       spdlog::info("map {} stays out of the world: {}", map_id, m.reason);
       continue;
     }
@@ -129,10 +130,9 @@ AtlasGeoreference GeoreferenceAtlas(SlamSystem& slam, const GpsLog& log,
       MoveMapIntoWorld(slam.map(), map_id, placement->world_from_keyframe, placement->world_from_map);
     }
     m.in_world = true;
-    spdlog::info(
-        "map {} is in the world: {} of {} fixes kept, {:.2f} m RMSE (one similarity: {:.2f} m){}", map_id,
-        m.inliers, m.samples, m.fit_rmse_m, m.single_similarity_rmse_m,
-        m.roll_from_cameras ? "; its fixes lie on one line, the roll about it from its cameras" : "");
+    spdlog::info("map {} is in the world: {} of {} fixes kept, {:.2f} m RMSE (one similarity: {:.2f} m){}",
+                 map_id, m.inliers, m.samples, m.fit_rmse_m, m.single_similarity_rmse_m,
+                 m.roll_from_cameras ? "; on (or near) one line, the roll about it from its cameras" : "");
   }
 
   // Maps in the world share its frame: the largest takes the others in.

@@ -40,7 +40,7 @@ struct MapGeoreferenceSummary {
   double fit_rmse_m = 0.0;                // the kept fixes against the fused antenna positions
   double single_similarity_rmse_m = 0.0;  // the kept fixes against the one similarity (the paper's fit)
   bool in_world = false;
-  bool roll_from_cameras = false;            // its fixes lie on one line: the cameras' down axis set the roll
+  bool roll_from_cameras = false;            // on (or near) one line: the cameras' down axis set the roll
   std::string reason;                        // why not, when not
   std::optional<std::uint32_t> joined_into;  // the map it was joined into, when joined
   // For the GPS plot: the samples (fixes in ENU), which the fusion kept, and this run's frames of the map
