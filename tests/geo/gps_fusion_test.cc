@@ -146,8 +146,8 @@ TEST(GpsFusion, MovesTheFixesByTheLeverArm) {
 }
 
 // Fixes on one line leave the roll about it free: the cameras' down axis sets it, and the graph holds it
-// there. Free, the graph would turn about the line to swing the lever arm onto whatever the fixes do not
-// explain (here 15 cm of lever arm error sideways).
+// there. Free, only the lever arm (here 15 cm off sideways) and the map's attitude noise (half a degree) bear
+// on it, and the graph turns about the line.
 TEST(GpsFusion, AStraightDriveTakesItsRollFromTheCameras) {
   Drive d = MakeDrive(0.01, 0.0, 0.05, 0.05, 30, 0.0, 13, testing::StraightRoad());
   const Eigen::Vector3d antenna(-0.3, 0.7, -1.1);  // left of, below and behind the camera (KITTI's)
