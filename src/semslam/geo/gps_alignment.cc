@@ -77,41 +77,45 @@ double TriangleSine(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   return middle > 0 ? area2 / (longest * middle) : 0.0;
 }
 
+// Sum of weight * (p - mean)(p - mean)^T over the points (unit weights when `weights` is empty).
+Eigen::Matrix3d Scatter(const Points3d& points, const std::vector<double>& weights,
+                        const Eigen::Vector3d& mean) {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < points.size(); ++i)
+    scatter += (weights.empty() ? 1.0 : weights[i]) * (points[i] - mean) * (points[i] - mean).transpose();
+  return scatter;
+}
+
 // Eigenvalues (ascending) of the points' scatter about their mean, per point.
 Eigen::Vector3d ScatterEigenvalues(const Points3d& points) {
   if (points.size() < 2) return Eigen::Vector3d::Zero();
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d& p : points) mean += p;
   mean /= static_cast<double>(points.size());
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const Eigen::Vector3d& p : points) scatter += (p - mean) * (p - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter / static_cast<double>(points.size()),
-                                                              Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(
+      Scatter(points, {}, mean) / static_cast<double>(points.size()), Eigen::EigenvaluesOnly);
   return solver.eigenvalues().cwiseMax(0.0);
 }
 
-// sqrt(second / largest eigenvalue) of the points' scatter: 0 on a line, 1 for an isotropic spread.
-double SpreadRatio(const Points3d& points) {
-  const Eigen::Vector3d eig = ScatterEigenvalues(points);
-  if (!(eig(2) > 0)) return 0.0;
-  return std::sqrt(eig(1) / eig(2));
+// sqrt(second / largest) of a scatter's eigenvalues (ascending): 0 on a line, 1 for an isotropic spread.
+double SpreadRatio(const Eigen::Vector3d& eigenvalues) {
+  return eigenvalues(2) > 0 ? std::sqrt(eigenvalues(1) / eigenvalues(2)) : 0.0;
 }
 
 // RMS distance of the map positions from their principal line, in the fixes' metres (the scale from the
-// spreads along the lines: the map's own for a metric map).
-double AcrossLineSpreadMetres(const Points3d& map, const Points3d& enu, bool estimate_scale) {
-  const Eigen::Vector3d map_eig = ScatterEigenvalues(map), enu_eig = ScatterEigenvalues(enu);
-  const double scale = !estimate_scale ? 1.0 : map_eig(2) > 0 ? std::sqrt(enu_eig(2) / map_eig(2)) : 0.0;
-  return scale * std::sqrt(map_eig(0) + map_eig(1));
+// spreads along the lines: the map's own for a metric map), from the two scatters' eigenvalues.
+double AcrossLineSpreadMetres(const Eigen::Vector3d& map_eigenvalues, const Eigen::Vector3d& enu_eigenvalues,
+                              bool estimate_scale) {
+  const double scale = !estimate_scale          ? 1.0
+                       : map_eigenvalues(2) > 0 ? std::sqrt(enu_eigenvalues(2) / map_eigenvalues(2))
+                                                : 0.0;
+  return scale * std::sqrt(map_eigenvalues(0) + map_eigenvalues(1));
 }
 
 // Unit principal axis of the weighted points' scatter around `mean`.
 Eigen::Vector3d PrincipalAxis(const Points3d& points, const std::vector<double>& weights,
                               const Eigen::Vector3d& mean) {
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (size_t i = 0; i < points.size(); ++i)
-    scatter += weights[i] * (points[i] - mean) * (points[i] - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(Scatter(points, weights, mean));
   return solver.eigenvectors().col(2);
 }
 
@@ -256,12 +260,13 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
   // Unit axes that agree give a mean near unit length; a mean of axes pointing every way is no axis.
   constexpr double kMinDownAgreement = 0.5;
   const bool down_known = options.roll_from_camera_down && map_down.norm() > kMinDownAgreement;
-  bool along_line = SpreadRatio(src) < options.min_spread_ratio;
+  const Eigen::Vector3d map_spread = ScatterEigenvalues(src);
+  bool along_line = SpreadRatio(map_spread) < options.min_spread_ratio;
   if (along_line && !down_known) return std::nullopt;
   if (!along_line && down_known) {
     std::vector<double> sigmas;
     for (const GpsSample& s : samples) sigmas.push_back(s.sigma_m);
-    along_line = AcrossLineSpreadMetres(src, tgt, options.estimate_scale) <
+    along_line = AcrossLineSpreadMetres(map_spread, ScatterEigenvalues(tgt), options.estimate_scale) <
                  options.min_roll_spread_sigmas * Median(sigmas);
   }
   const auto fit = [&](const Points3d& s, const Points3d& t, const std::vector<double>& w) {
@@ -276,6 +281,7 @@ std::optional<GpsAlignment> AlignMapToGps(const std::vector<GpsSample>& samples,
     std::mt19937_64 rng(options.seed);
     std::uniform_int_distribution<size_t> pick(0, n - 1);
     for (int iteration = 0; iteration < options.ransac_iterations; ++iteration) {
+      // Along a line a pair is minimal: no third draw (c stands in for a).
       const size_t a = pick(rng), b = pick(rng), c = along_line ? a : pick(rng);
       if (a == b || (!along_line && (a == c || b == c))) continue;
       if (!along_line && (TriangleSine(src[a], src[b], src[c]) < options.min_triangle_sine ||

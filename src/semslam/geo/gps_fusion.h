@@ -62,8 +62,9 @@ struct GpsFusionOptions {
   double rotation_sigma_rad = 0.002;
   double log_scale_sigma_per_sqrt_m = 0.002;
   double prior_loss_scale = 2.0;  // Cauchy scale, in sigmas of the fix (the last of the graduated ones)
-  // Fixes on one line leave the roll about it free, and the antenna's lever arm would turn the graph about it
-  // to fit their noise: every node's camera down axis is then held where the alignment put it (radians).
+  // Fixes on (or near) one line leave the roll about it to the alignment's camera down axis; in the graph
+  // only the antenna's lever arm and the map's attitude noise would bear on it, and it turns freely (KITTI
+  // 04: 12.9 deg): every node's camera down axis is then held where the alignment put it (radians).
   double line_roll_sigma_rad = 0.05;
   double outlier_sigma = 5.0;     // a fix farther than this many sigmas from its fused frame is dropped
   int max_rounds = 3;             // solves after the graduated ones, each without the fixes dropped before
