@@ -217,8 +217,9 @@ def worse_findings(findings):
 
 
 def _joined(findings, per_case):
-    """The findings' lines, one per case and figure (per_case: one per case), their details joined in the order
-    found; a finding without a detail (a failed case, or one of older results) keeps its own line."""
+    """The findings' lines, one per case (per_case: the details after one head naming the case and its variant;
+    else each detail after its figure and variant), joined in the order found; a finding without a detail (a
+    failed case, or one of older results) keeps its own line."""
     lines, index = [], {}
     for f in findings:
         if "detail" not in f:
@@ -228,8 +229,8 @@ def _joined(findings, per_case):
             key, head = f["case"], "%s (%s): " % (f["case"], f["variant"])
             part = "%s %s" % (f["figure"], f["detail"])
         else:
-            key, head = (f["case"], f["figure"]), "%s %s: " % (f["case"], f["figure"])
-            part = "%s: %s" % (f["variant"], f["detail"])
+            key, head = f["case"], "%s: " % f["case"]
+            part = "%s %s: %s" % (f["figure"], f["variant"], f["detail"])
         if key in index:
             lines[index[key]] += "; " + part
         else:

@@ -196,17 +196,17 @@ class Markdown(unittest.TestCase):
         self.assertIn("not for the worse:\n- case_a ate_m (synchronous): 0.2 -> 0.1 (better)", text)
         self.assertNotIn("A quick run", text)
 
-    def test_findings_one_line_per_figure_and_changes_per_case(self):
+    def test_findings_and_changes_one_line_per_case(self):
         old = results({"ate_m": figure(sync=0.1, quiet=[0.1, 0.1], busy=[0.1]),
                        "rmse": figure(sync=0.2), "loops": figure(None, sync=1)})
         new = results({"ate_m": figure(sync=0.2, quiet=[0.2, 0.2], busy=[0.2]),
                        "rmse": figure(sync=0.1), "loops": figure(None, sync=2)})
         new["comparison"] = {"baseline_commit": "abc", "findings": report.compare(old, new)}
         lines = report.markdown(new).splitlines()
-        worse = [line for line in lines if line.startswith("- case_a ate_m: ")]
+        worse = [line for line in lines if line.startswith("- case_a: ")]
         self.assertEqual(len(worse), 1)
-        self.assertEqual([part.split(":")[0] for part in worse[0][len("- case_a ate_m: "):].split("; ")],
-                         ["quiet", "busy", "synchronous"])
+        self.assertEqual([part.split(":")[0] for part in worse[0][len("- case_a: "):].split("; ")],
+                         ["ate_m quiet", "ate_m busy", "ate_m synchronous"])
         self.assertIn("- case_a (synchronous): rmse 0.2000 -> 0.1000 m (better); loops 1.0000 -> 2.0000 m (changed)",
                       lines)
 
