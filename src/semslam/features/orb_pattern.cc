@@ -88,9 +88,14 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
       }
     }
   }
+  // One draw per statement: a call evaluates its arguments in the compiler's order, and the images (so the
+  // learned pattern) must not depend on the compiler. The order is the one the stored table was learned with
+  // (GCC evaluates a call's arguments last to first).
   auto intensity = [&] { return cv::Scalar(random.UniformInt(0, 255)); };
   auto rand_point = [&] {
-    return cv::Point(random.UniformInt(-w / 8, w + w / 8), random.UniformInt(-h / 8, h + h / 8));
+    const int y = random.UniformInt(-h / 8, h + h / 8);
+    const int x = random.UniformInt(-w / 8, w + w / 8);
+    return cv::Point(x, y);
   };
   const int num_shapes = random.UniformInt(60, 140);
   for (int i = 0; i < num_shapes; ++i) {
@@ -123,15 +128,18 @@ cv::Mat MakeSyntheticTrainingImage(std::uint64_t seed, cv::Size size) {
         break;
       }
       case 2: {  // ellipse
-        cv::ellipse(image, c,
-                    cv::Size(static_cast<int>(scale * (0.2 + random.Uniform())) + 1,
-                             static_cast<int>(scale * (0.2 + random.Uniform())) + 1),
-                    random.Uniform() * 180, 0, 360, intensity(),
-                    random.UniformInt(0, 2) == 0 ? 2 : cv::FILLED, cv::LINE_AA);
+        const int thickness = random.UniformInt(0, 2) == 0 ? 2 : cv::FILLED;
+        const cv::Scalar value = intensity();
+        const double angle = random.Uniform() * 180;
+        const int ry = static_cast<int>(scale * (0.2 + random.Uniform())) + 1;
+        const int rx = static_cast<int>(scale * (0.2 + random.Uniform())) + 1;
+        cv::ellipse(image, c, cv::Size(rx, ry), angle, 0, 360, value, thickness, cv::LINE_AA);
         break;
       }
       case 3: {  // line
-        cv::line(image, c, rand_point(), intensity(), random.UniformInt(1, 4), cv::LINE_AA);
+        const int thickness = random.UniformInt(1, 4);
+        const cv::Scalar value = intensity();
+        cv::line(image, c, rand_point(), value, thickness, cv::LINE_AA);
         break;
       }
       case 4: {  // grid of small rectangles (windows, tiles)

@@ -7,15 +7,27 @@
 
 #include "semslam/core/error.h"
 #include "semslam/semantics/class_table.h"
+#include "semslam/sim/city_parts.h"
 #include "semslam/sim/random.h"
 
 namespace semslam::sim {
 namespace {
 
-constexpr std::uint8_t Label(SemanticClass c) { return static_cast<std::uint8_t>(c); }
-
-constexpr float kSidewalkHeight = 0.15f;
-constexpr float kGrassTop = 0.19f;
+using city_parts::AddBicycle;
+using city_parts::AddBush;
+using city_parts::AddCar;
+using city_parts::AddPerson;
+using city_parts::AddTrafficLight;
+using city_parts::AddTrafficSign;
+using city_parts::AddTree;
+using city_parts::Bits;
+using city_parts::Builder;
+using city_parts::DrawLook;
+using city_parts::F;
+using city_parts::kGrassTop;
+using city_parts::kSidewalkHeight;
+using city_parts::Label;
+using city_parts::Look;
 
 // Named places of the town, drawn without repetition.
 struct PlaceName {
@@ -80,48 +92,6 @@ constexpr std::array<PlaceName, 6> kOpenPlaceNames = {{
     {"Castle Gardens", "park"},
     {"Linden Green", "park"},
 }};
-
-class Builder {
- public:
-  explicit Builder(City& city) : city_(city) {}
-
-  std::uint32_t NewObject(const std::string& kind, SemanticClass label, const std::string& name = {}) {
-    city_.objects.push_back({kind, Label(label), name});
-    return static_cast<std::uint32_t>(city_.objects.size() - 1);
-  }
-  Primitive& Box(std::uint32_t object, Material material, SemanticClass label, const Eigen::Vector3f& lo,
-                 const Eigen::Vector3f& hi, float tone, std::uint32_t variant) {
-    Primitive p;
-    p.shape = Shape::kBox;
-    p.material = material;
-    p.label = Label(label);
-    p.object = object;
-    p.lo = lo.cwiseMin(hi);
-    p.hi = lo.cwiseMax(hi);
-    p.tone = tone;
-    p.variant = variant;
-    city_.primitives.push_back(p);
-    return city_.primitives.back();
-  }
-  Primitive& Cylinder(std::uint32_t object, Material material, SemanticClass label, float cx, float cy,
-                      float r, float z0, float z1, float tone, std::uint32_t variant) {
-    Primitive& p = Box(object, material, label, {cx - r, cy - r, z0}, {cx + r, cy + r, z1}, tone, variant);
-    p.shape = Shape::kCylinder;
-    return p;
-  }
-  Primitive& Ellipsoid(std::uint32_t object, Material material, SemanticClass label, const Eigen::Vector3f& c,
-                       const Eigen::Vector3f& r, float tone, std::uint32_t variant) {
-    Primitive& p = Box(object, material, label, c - r, c + r, tone, variant);
-    p.shape = Shape::kEllipsoid;
-    return p;
-  }
-
- private:
-  City& city_;
-};
-
-std::uint32_t Bits(Rng& rng) { return static_cast<std::uint32_t>(rng.Next() >> 32); }
-float F(double v) { return static_cast<float>(v); }
 
 FacadeStyle RandomStyle(Rng& rng) {
   FacadeStyle s;
@@ -243,8 +213,9 @@ class CityGenerator {
         if (!real_w && !real_e) continue;
         if (!real_s && !real_n) continue;
         const std::uint32_t slab = b_.NewObject("sidewalk", SemanticClass::kSidewalk);
+        const Look slab_look = DrawLook(rng);
         b_.Box(slab, Material::kSidewalk, SemanticClass::kSidewalk, {F(x0), F(y0), 0.f},
-               {F(x1), F(y1), kSidewalkHeight}, F(rng.Uniform()), Bits(rng));
+               {F(x1), F(y1), kSidewalkHeight}, slab_look.tone, slab_look.variant);
         const int k = kind[static_cast<size_t>(bj * nbx + bi)];
         if (k == 1) {
           OpenPlace(rng, x0, y0, x1, y1);
@@ -271,9 +242,10 @@ class CityGenerator {
         const double inset = sw + std::min(max_depth, 18.0) + 1.0;
         if (x1 - x0 > 2 * inset + 4 && y1 - y0 > 2 * inset + 4) {
           const std::uint32_t yard = b_.NewObject("terrain", SemanticClass::kTerrain);
+          const Look yard_look = DrawLook(rng);
           b_.Box(yard, Material::kGrass, SemanticClass::kTerrain,
                  {F(x0 + inset), F(y0 + inset), kSidewalkHeight}, {F(x1 - inset), F(y1 - inset), kGrassTop},
-                 F(rng.Uniform()), Bits(rng));
+                 yard_look.tone, yard_look.variant);
         }
       }
     }
@@ -395,7 +367,8 @@ class CityGenerator {
     Eigen::Vector3f lo, hi;
     FootprintBox(f, a, b, 0.2, std::min(0.9, setback - 0.3), &lo, &hi, kSidewalkHeight,
                  F(rng.Uniform(0.9, 1.5)));
-    b_.Box(obj, Material::kFoliage, SemanticClass::kVegetation, lo, hi, F(rng.Uniform()), Bits(rng));
+    const Look look = DrawLook(rng);
+    b_.Box(obj, Material::kFoliage, SemanticClass::kVegetation, lo, hi, look.tone, look.variant);
   }
 
   void Gap(Rng& rng, const Frontage& f, double a, double b, double max_depth, Material kind) {
@@ -403,15 +376,18 @@ class CityGenerator {
     const std::uint32_t lawn = b_.NewObject("terrain", SemanticClass::kTerrain);
     Eigen::Vector3f lo, hi;
     FootprintBox(f, a, b, 0.3, max_depth - 0.3, &lo, &hi, kSidewalkHeight, kGrassTop);
-    b_.Box(lawn, Material::kGrass, SemanticClass::kTerrain, lo, hi, F(rng.Uniform()), Bits(rng));
+    const Look lawn_look = DrawLook(rng);
+    b_.Box(lawn, Material::kGrass, SemanticClass::kTerrain, lo, hi, lawn_look.tone, lawn_look.variant);
     if (kind == Material::kWall) {
       const std::uint32_t obj = b_.NewObject("wall", SemanticClass::kWall);
       FootprintBox(f, a, b, 0.0, 0.3, &lo, &hi, kSidewalkHeight, F(rng.Uniform(1.3, 2.4)));
-      b_.Box(obj, Material::kWall, SemanticClass::kWall, lo, hi, F(rng.Uniform()), Bits(rng));
+      const Look wall_look = DrawLook(rng);
+      b_.Box(obj, Material::kWall, SemanticClass::kWall, lo, hi, wall_look.tone, wall_look.variant);
     } else if (kind == Material::kFence) {
       const std::uint32_t obj = b_.NewObject("fence", SemanticClass::kFence);
       FootprintBox(f, a, b, 0.0, 0.06, &lo, &hi, kSidewalkHeight, F(rng.Uniform(1.1, 1.9)));
-      b_.Box(obj, Material::kFence, SemanticClass::kFence, lo, hi, F(rng.Uniform()), Bits(rng));
+      const Look fence_look = DrawLook(rng);
+      b_.Box(obj, Material::kFence, SemanticClass::kFence, lo, hi, fence_look.tone, fence_look.variant);
     }
     // Trees and bushes in the garden.
     const int trees = rng.UniformInt(1, std::max(1, static_cast<int>((b - a) / 7.0)));
@@ -422,32 +398,11 @@ class CityGenerator {
       const double x = f.axis == 0 ? along : face;
       const double y = f.axis == 0 ? face : along;
       if (rng.Bernoulli(0.6)) {
-        Tree(rng, x, y, kSidewalkHeight);
+        AddTree(b_, rng, x, y, kSidewalkHeight);
       } else {
-        Bush(rng, x, y);
+        AddBush(b_, rng, x, y);
       }
     }
-  }
-
-  void Tree(Rng& rng, double x, double y, float z0, double scale = 1.0) {
-    const std::uint32_t obj = b_.NewObject("tree", SemanticClass::kVegetation);
-    const float tone = F(rng.Uniform());
-    const std::uint32_t variant = Bits(rng);
-    const double trunk = rng.Uniform(2.2, 3.2) * scale;
-    const double r = rng.Uniform(0.13, 0.22) * scale;
-    const double rx = rng.Uniform(1.8, 3.2) * scale, rz = rng.Uniform(2.2, 3.6) * scale;
-    b_.Cylinder(obj, Material::kBark, SemanticClass::kVegetation, F(x), F(y), F(r), z0,
-                F(z0 + trunk + rz * 0.5), tone, variant);
-    b_.Ellipsoid(obj, Material::kFoliage, SemanticClass::kVegetation, {F(x), F(y), F(z0 + trunk + rz * 0.85)},
-                 {F(rx), F(rx * rng.Uniform(0.85, 1.15)), F(rz)}, tone, variant);
-  }
-
-  void Bush(Rng& rng, double x, double y) {
-    const std::uint32_t obj = b_.NewObject("bush", SemanticClass::kVegetation);
-    const double r = rng.Uniform(0.6, 1.4);
-    b_.Ellipsoid(obj, Material::kFoliage, SemanticClass::kVegetation,
-                 {F(x), F(y), kSidewalkHeight + F(r * 0.5)}, {F(r), F(r * rng.Uniform(0.8, 1.2)), F(r * 0.8)},
-                 F(rng.Uniform()), Bits(rng));
   }
 
   // Park (lawn, trees, bushes, hedge) or square (paved, trees in rows, lamps).
@@ -458,15 +413,17 @@ class CityGenerator {
     const std::uint32_t obj = b_.NewObject(
         park ? "park" : "square", park ? SemanticClass::kTerrain : SemanticClass::kSidewalk, pn.name);
     if (park) {
+      const Look lawn_look = DrawLook(rng);
       b_.Box(obj, Material::kGrass, SemanticClass::kTerrain, {F(x0 + sw), F(y0 + sw), kSidewalkHeight},
-             {F(x1 - sw), F(y1 - sw), kGrassTop}, F(rng.Uniform()), Bits(rng));
+             {F(x1 - sw), F(y1 - sw), kGrassTop}, lawn_look.tone, lawn_look.variant);
       // Hedges along the edges, with entrances in the middle of each side.
       const std::uint32_t hedge = b_.NewObject("hedge", SemanticClass::kVegetation);
       const float h = F(rng.Uniform(1.0, 1.4));
       const double mx = 0.5 * (x0 + x1), my = 0.5 * (y0 + y1);
       auto add = [&](double ax, double ay, double bx, double by) {
+        const Look hedge_look = DrawLook(rng);
         b_.Box(hedge, Material::kFoliage, SemanticClass::kVegetation, {F(ax), F(ay), kGrassTop},
-               {F(bx), F(by), h}, F(rng.Uniform()), Bits(rng));
+               {F(bx), F(by), h}, hedge_look.tone, hedge_look.variant);
       };
       add(x0 + sw, y0 + sw, mx - 3, y0 + sw + 0.8);
       add(mx + 3, y0 + sw, x1 - sw, y0 + sw + 0.8);
@@ -480,21 +437,25 @@ class CityGenerator {
       for (int t = 0; t < trees; ++t) {
         const double x = rng.Uniform(x0 + sw + 4, x1 - sw - 4), y = rng.Uniform(y0 + sw + 4, y1 - sw - 4);
         if (rng.Bernoulli(0.7)) {
-          Tree(rng, x, y, kGrassTop, rng.Uniform(1.0, 1.5));
+          AddTree(b_, rng, x, y, kGrassTop, rng.Uniform(1.0, 1.5));
         } else {
-          Bush(rng, x, y);
+          AddBush(b_, rng, x, y);
         }
       }
     } else {
       for (double x = x0 + sw + 6; x < x1 - sw - 4; x += 12) {
         for (double y = y0 + sw + 6; y < y1 - sw - 4; y += 12) {
-          if (rng.Bernoulli(0.65)) Tree(rng, x + rng.Uniform(-1, 1), y + rng.Uniform(-1, 1), kSidewalkHeight);
+          if (!rng.Bernoulli(0.65)) continue;
+          const double dy = rng.Uniform(-1, 1);
+          const double dx = rng.Uniform(-1, 1);
+          AddTree(b_, rng, x + dx, y + dy, kSidewalkHeight);
         }
       }
       const std::uint32_t basin = b_.NewObject("fountain", SemanticClass::kWall);
       const double mx = 0.5 * (x0 + x1), my = 0.5 * (y0 + y1);
+      const Look look = DrawLook(rng);
       b_.Cylinder(basin, Material::kWall, SemanticClass::kWall, F(mx), F(my), 4.0f, kSidewalkHeight, 0.75f,
-                  F(rng.Uniform()), Bits(rng));
+                  look.tone, look.variant);
     }
     const Eigen::Vector3d centre(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.0);
     city_.places.push_back({pn.name, pn.category, centre, obj});
@@ -541,7 +502,7 @@ class CityGenerator {
             for (double l : lamps) clear = clear && std::abs(l - s) > 3.0;
             if (!clear) continue;
             const Eigen::Vector2d p = at(s, 1.3);
-            Tree(rng, p.x(), p.y(), kSidewalkHeight);
+            AddTree(b_, rng, p.x(), p.y(), kSidewalkHeight);
           }
         }
         // Signs and traffic lights for the traffic arriving at this segment's ends on this side: traffic on
@@ -559,55 +520,14 @@ class CityGenerator {
           const bool lights = irng.Bernoulli(0.4);
           if (lights) {
             const Eigen::Vector2d p = at(s_end - dir * 0.5, 0.5);
-            TrafficLight(rng, p, facing);
+            AddTrafficLight(b_, rng, p, facing);
           } else if (rng.Bernoulli(0.6)) {
             const Eigen::Vector2d p = at(s_end - dir * rng.Uniform(4.0, 12.0), 0.5);
-            TrafficSign(rng, p, facing);
+            AddTrafficSign(b_, rng, p, facing);
           }
         }
       }
     }
-  }
-
-  void TrafficLight(Rng& rng, const Eigen::Vector2d& p, int facing) {
-    const std::uint32_t post = b_.NewObject("pole", SemanticClass::kPole);
-    const float tone = F(rng.Uniform());
-    b_.Cylinder(post, Material::kPole, SemanticClass::kPole, F(p.x()), F(p.y()), 0.07f, kSidewalkHeight, 3.6f,
-                tone, Bits(rng));
-    const std::uint32_t obj = b_.NewObject("traffic_light", SemanticClass::kTrafficLight);
-    // Housing in front of the post, facing the arriving traffic.
-    const Eigen::Vector2d n = facing == 0   ? Eigen::Vector2d(1, 0)
-                              : facing == 1 ? Eigen::Vector2d(0, 1)
-                              : facing == 2 ? Eigen::Vector2d(-1, 0)
-                                            : Eigen::Vector2d(0, -1);
-    const Eigen::Vector2d c = p + n * 0.2;
-    const Eigen::Vector2d half(std::abs(n.x()) * 0.13 + std::abs(n.y()) * 0.17,
-                               std::abs(n.y()) * 0.13 + std::abs(n.x()) * 0.17);
-    Primitive& h = b_.Box(obj, Material::kTrafficLight, SemanticClass::kTrafficLight,
-                          {F(c.x() - half.x()), F(c.y() - half.y()), 2.55f},
-                          {F(c.x() + half.x()), F(c.y() + half.y()), 3.5f}, tone, Bits(rng));
-    h.facing = static_cast<std::uint8_t>(facing);
-  }
-
-  void TrafficSign(Rng& rng, const Eigen::Vector2d& p, int facing) {
-    const std::uint32_t post = b_.NewObject("pole", SemanticClass::kPole);
-    const float tone = F(rng.Uniform());
-    const float top = F(rng.Uniform(2.6, 3.0));
-    b_.Cylinder(post, Material::kPole, SemanticClass::kPole, F(p.x()), F(p.y()), 0.04f, kSidewalkHeight,
-                top - 0.2f, tone, Bits(rng));
-    const std::uint32_t obj = b_.NewObject("traffic_sign", SemanticClass::kTrafficSign);
-    const Eigen::Vector2d n = facing == 0   ? Eigen::Vector2d(1, 0)
-                              : facing == 1 ? Eigen::Vector2d(0, 1)
-                              : facing == 2 ? Eigen::Vector2d(-1, 0)
-                                            : Eigen::Vector2d(0, -1);
-    const Eigen::Vector2d c = p + n * 0.07;
-    const double w = rng.Uniform(0.3, 0.4);
-    const Eigen::Vector2d half(std::abs(n.x()) * 0.02 + std::abs(n.y()) * w,
-                               std::abs(n.y()) * 0.02 + std::abs(n.x()) * w);
-    Primitive& s = b_.Box(obj, Material::kSign, SemanticClass::kTrafficSign,
-                          {F(c.x() - half.x()), F(c.y() - half.y()), top - F(2 * w)},
-                          {F(c.x() + half.x()), F(c.y() + half.y()), top}, tone, Bits(rng));
-    s.facing = static_cast<std::uint8_t>(facing);
   }
 
   // Parked cars, persons and bicycles: drawn from the traffic seed, so that a second drive through the same
@@ -629,7 +549,7 @@ class CityGenerator {
         for (double s = s0 + rng.Uniform(0, 4); s < s1 - 4.0;) {
           const double length = rng.Uniform(3.9, 4.8);
           if (rng.Uniform() < density) {
-            Car(rng, axis, s + length / 2, lane, length);
+            AddCar(b_, rng, axis, s + length / 2, lane, length);
             s += length + rng.Uniform(0.8, 2.5);
           } else {
             s += rng.Uniform(3.0, 7.0);
@@ -642,79 +562,17 @@ class CityGenerator {
         for (int k = 0; k < persons; ++k) {
           const double s = rng.Uniform(s_lo, s_hi);
           const double across = c + side * (rw + rng.Uniform(1.8, 3.2));
-          Person(rng, axis == 0 ? s : across, axis == 0 ? across : s);
+          AddPerson(b_, rng, axis == 0 ? s : across, axis == 0 ? across : s);
         }
         const int bikes =
             static_cast<int>(std::floor((s_hi - s_lo) * options_.bicycle_density * 2.0 * rng.Uniform()));
         for (int k = 0; k < bikes; ++k) {
           const double s = rng.Uniform(s_lo, s_hi);
           const double across = c + side * (rw + 0.35);
-          Bicycle(rng, axis, axis == 0 ? s : across, axis == 0 ? across : s);
+          AddBicycle(b_, rng, axis, axis == 0 ? s : across, axis == 0 ? across : s);
         }
       }
     }
-  }
-
-  void Car(Rng& rng, int axis, double along, double across, double length) {
-    const std::uint32_t obj = b_.NewObject("car", SemanticClass::kCar);
-    const double width = rng.Uniform(1.7, 1.9), height = rng.Uniform(1.4, 1.6);
-    const float tone = F(rng.Uniform());
-    const std::uint32_t variant = Bits(rng);
-    auto box = [&](Material m, double a0, double a1, double c0, double c1, double z0, double z1) {
-      Eigen::Vector3f lo, hi;
-      if (axis == 0) {
-        lo = {F(along + a0), F(across + c0), F(z0)};
-        hi = {F(along + a1), F(across + c1), F(z1)};
-      } else {
-        lo = {F(across + c0), F(along + a0), F(z0)};
-        hi = {F(across + c1), F(along + a1), F(z1)};
-      }
-      b_.Box(obj, m, SemanticClass::kCar, lo, hi, tone, variant);
-    };
-    const double hl = length / 2, hw = width / 2;
-    const double belt = height * 0.6;
-    box(Material::kCarBody, -hl, hl, -hw, hw, 0.3, belt);
-    const double cab0 = -hl * 0.55 + rng.Uniform(-0.2, 0.2), cab1 = hl * 0.35;
-    box(Material::kCarCabin, cab0, cab1, -hw + 0.08, hw - 0.08, belt, height);
-    for (int fa = -1; fa <= 1; fa += 2) {
-      for (int sa = -1; sa <= 1; sa += 2) {
-        const double wa = fa * (hl - 0.85), ws = sa * (hw - 0.12);
-        box(Material::kTire, wa - 0.32, wa + 0.32, ws - 0.13, ws + 0.13, 0.0, 0.62);
-      }
-    }
-  }
-
-  void Person(Rng& rng, double x, double y) {
-    const std::uint32_t obj = b_.NewObject("person", SemanticClass::kPerson);
-    const float tone = F(rng.Uniform());
-    const std::uint32_t variant = Bits(rng);
-    const double h = rng.Uniform(1.55, 1.9);
-    const float z0 = kSidewalkHeight;
-    b_.Box(obj, Material::kClothes, SemanticClass::kPerson, {F(x - 0.16), F(y - 0.12), z0},
-           {F(x + 0.16), F(y + 0.12), z0 + F(h * 0.47)}, tone * 0.5f, variant);
-    b_.Box(obj, Material::kClothes, SemanticClass::kPerson, {F(x - 0.22), F(y - 0.14), z0 + F(h * 0.47)},
-           {F(x + 0.22), F(y + 0.14), z0 + F(h * 0.86)}, tone, variant ^ 1u);
-    b_.Ellipsoid(obj, Material::kSkin, SemanticClass::kPerson, {F(x), F(y), z0 + F(h * 0.93)},
-                 {0.1f, 0.1f, F(h * 0.07)}, tone, variant);
-  }
-
-  void Bicycle(Rng& rng, int axis, double x, double y) {
-    const std::uint32_t obj = b_.NewObject("bicycle", SemanticClass::kBicycle);
-    const float tone = F(rng.Uniform());
-    const std::uint32_t variant = Bits(rng);
-    const float z0 = kSidewalkHeight;
-    auto box = [&](double a0, double a1, double c0, double c1, double z_lo, double z_hi) {
-      const Eigen::Vector3f lo = axis == 0 ? Eigen::Vector3f(F(x + a0), F(y + c0), z0 + F(z_lo))
-                                           : Eigen::Vector3f(F(x + c0), F(y + a0), z0 + F(z_lo));
-      const Eigen::Vector3f hi = axis == 0 ? Eigen::Vector3f(F(x + a1), F(y + c1), z0 + F(z_hi))
-                                           : Eigen::Vector3f(F(x + c1), F(y + a1), z0 + F(z_hi));
-      b_.Box(obj, Material::kBicycle, SemanticClass::kBicycle, lo, hi, tone, variant);
-    };
-    box(-0.85, -0.2, -0.025, 0.025, 0.0, 0.66);  // rear wheel
-    box(0.2, 0.85, -0.025, 0.025, 0.0, 0.66);    // front wheel
-    box(-0.5, 0.55, -0.02, 0.02, 0.55, 0.62);    // top tube
-    box(-0.3, -0.15, -0.1, 0.1, 0.85, 0.92);     // saddle
-    box(0.45, 0.55, -0.28, 0.28, 0.95, 1.0);     // handlebar
   }
 
   std::uint16_t AddStyle(const FacadeStyle& s) {

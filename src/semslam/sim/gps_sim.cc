@@ -28,7 +28,11 @@ std::vector<StampedOxts> SimulateOxts(const SyntheticCity& sim) {
     const bool dropped = rng.Bernoulli(gps.dropout);
     const bool outlier = rng.Bernoulli(gps.outliers);
     const double outlier_angle = rng.Uniform(0.0, 2.0 * M_PI);
-    const Eigen::Vector3d noise(rng.Gaussian(), rng.Gaussian(), rng.Gaussian());
+    // One draw per statement (random.h), the last axis first as GCC's builds drew them.
+    const double noise_up = rng.Gaussian();
+    const double noise_north = rng.Gaussian();
+    const double noise_east = rng.Gaussian();
+    const Eigen::Vector3d noise(noise_east, noise_north, noise_up);
     if (dropped && f != 0) continue;
     const Rigid3d& town_from_camera = route.town_from_camera[f];
     Eigen::Vector3d enu = town_from_camera.translation + gps.noise * noise;

@@ -2,6 +2,8 @@
 // Deterministic random numbers for the synthetic city. The standard library's distributions are
 // implementation-defined, so the town of a seed would differ between standard libraries; these are our own:
 // SplitMix64 (Steele, Lea, Flood 2014) as the generator and as a hash, uniform and Gaussian draws on top.
+// For the same reason every draw is a statement of its own, never one of several arguments of one call: the
+// order in which a call evaluates its arguments is the compiler's.
 
 #include <cmath>
 #include <cstdint>
