@@ -13,8 +13,8 @@ import subprocess
 import threading
 import time
 
-from bench_cases import (Case, RunFailed, Skip, bar, composed, drive0005, kitti07, read_json, run_slam, semslam,
-                         spec)
+from bench_cases import Case, bar, spec
+from bench_inputs import RunFailed, Skip, composed, drive0005, kitti07, read_json, run_slam, semslam
 
 CITY_SEED = 7331  # a town no test uses
 

@@ -5,7 +5,8 @@ and with one core kept busy; results.json and a Markdown table, compared with be
   scripts/benchmark.sh [--quick] [--runs N] [--out DIR] [--cases REGEX] [--long-drive DIR] [--first-output]
   scripts/benchmark.py --markdown RESULTS.json... --write-docs [--update-baseline]
 
-The cases are in scripts/bench_cases.py, the figures' comparison and the Markdown in scripts/bench_report.py.
+The cases are in scripts/bench_cases.py (running semslam and making their inputs in scripts/bench_inputs.py), the
+figures' comparison and the Markdown in scripts/bench_report.py.
 Runs go one at a time. Rendered synthetic towns and composed sequences are cached (--cache, default
 ~/.cache/semslam-bench) under a key of the renderer's and composer's sources, so a benchmark re-renders only what
 changed. results.json is written atomically at the end (results.partial.json after each case); Ctrl-C stops the
@@ -30,6 +31,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 import bench_cases  # noqa: E402
+import bench_inputs  # noqa: E402
 import bench_report  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -129,7 +131,7 @@ class Context:
                                      "apps/semslam/cmd_compose.cc"])
         self.current_case = None
         self.display_names = []  # (folder, name) pairs display() shortens, e.g. the long drive's maps folder
-        self.kitti00_lever_arm = bench_cases.KITTI00_LEVER_ARM
+        self.kitti00_lever_arm = bench_inputs.KITTI00_LEVER_ARM
 
     @staticmethod
     def clock():
@@ -223,7 +225,7 @@ class Context:
                 log.write("$ %s\n" % " ".join(command))
                 log.flush()
                 if self.call(command, log, timeout=600) != 0:
-                    raise bench_cases.RunFailed("%s failed" % " ".join(command[:3]))
+                    raise bench_inputs.RunFailed("%s failed" % " ".join(command[:3]))
             cloned = time.monotonic()
             command = [os.path.join(clone, "scripts", "demo.sh"), demo_out] + extra
             log.write("$ CCACHE_DIR=%s %s\n" % (env["CCACHE_DIR"], " ".join(command)))
@@ -238,7 +240,7 @@ class Context:
                         report_at = time.monotonic()
                     if time.monotonic() - start > 7200:
                         self._stop_child()
-                        raise bench_cases.RunFailed("timeout after 2 h")
+                        raise bench_inputs.RunFailed("timeout after 2 h")
                     time.sleep(0.5)
             except BaseException:
                 self._stop_child()
@@ -249,12 +251,12 @@ class Context:
         if report_at is None and os.path.exists(report):
             report_at = time.monotonic()
         if code != 0 or report_at is None:
-            raise bench_cases.RunFailed("scripts/demo.sh exit %s, report.html %s (log %s)" % (
+            raise bench_inputs.RunFailed("scripts/demo.sh exit %s, report.html %s (log %s)" % (
                 code, "written" if report_at else "missing", log_path))
         with open(log_path, errors="replace") as f:
             m = re.search(r"build \(semslam binary, [a-z]+\): (\d+) s", f.read())
         if not m:
-            raise bench_cases.RunFailed("no build time in the output of scripts/demo.sh (%s)" % log_path)
+            raise bench_inputs.RunFailed("no build time in the output of scripts/demo.sh (%s)" % log_path)
         build = float(m.group(1))
         figures = {"total_s": report_at - start, "clone_s": cloned - start, "build_s": build,
                    "demo_s": report_at - cloned - build}
@@ -320,14 +322,14 @@ def run_benchmark(args, cases, command_text):
         case_start = time.monotonic()
         try:
             prepared = case.prepare(ctx)
-        except bench_cases.Skip as e:
+        except bench_inputs.Skip as e:
             entry.update(status="skipped", reason=str(e))
             print("[%s] skipped: %s" % (case.name, e), flush=True)
             results["cases"][case.name] = entry
             done_estimate += sum(estimate(c, v) for c, v, _, _ in runs)
             done_runs += len(runs)
             continue
-        except bench_cases.RunFailed as e:
+        except bench_inputs.RunFailed as e:
             entry.update(status="failed", reason="preparing: %s" % e)
             print("[%s] FAILED preparing: %s" % (case.name, e), flush=True)
             results["cases"][case.name] = entry
@@ -343,7 +345,7 @@ def run_benchmark(args, cases, command_text):
                     figures = case.run(ctx, prepared, run_dir, variant)
                 measured.append((variant, figures))
                 outcome = "ok"
-            except bench_cases.RunFailed as e:
+            except bench_inputs.RunFailed as e:
                 entry["failures"].append("%s run %d: %s" % (variant, i + 1, e))
                 outcome = "FAILED: %s" % e
             seconds = time.monotonic() - t0

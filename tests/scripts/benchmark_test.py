@@ -12,7 +12,7 @@ import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 
-import bench_cases  # noqa: E402
+import bench_inputs  # noqa: E402
 import bench_city  # noqa: E402
 import bench_geo  # noqa: E402
 import bench_report as report  # noqa: E402
@@ -350,7 +350,7 @@ class LongDrive(unittest.TestCase):
             self.make(tmp, ["kitti00/dataset/sequences/00/times.txt", "kitti00/dataset/poses/00.txt",
                             "osm/maps/RTK_GPS_kitti_00.kml", "osm/maps/kitti_00.osm"])
             for folder in (os.path.join(tmp, "kitti00", "dataset"), tmp):
-                found = bench_cases.find_long_drive(folder)
+                found = bench_inputs.find_long_drive(folder)
                 self.assertEqual(found["sequence"], os.path.join(tmp, "kitti00", "dataset", "sequences", "00"))
                 self.assertEqual(found["poses"], os.path.join(tmp, "kitti00", "dataset", "poses", "00.txt"))
                 self.assertEqual(found["rtk"], os.path.join(tmp, "osm", "maps", "RTK_GPS_kitti_00.kml"))
@@ -359,14 +359,14 @@ class LongDrive(unittest.TestCase):
     def test_given_files_and_what_is_missing(self):
         with tempfile.TemporaryDirectory() as tmp:
             self.make(tmp, ["d/sequences/00/times.txt", "d/poses/00.txt", "elsewhere/track.kml"])
-            with self.assertRaisesRegex(bench_cases.Skip, "kitti_00.osm"):
-                bench_cases.find_long_drive(os.path.join(tmp, "d"), kml=os.path.join(tmp, "elsewhere/track.kml"))
+            with self.assertRaisesRegex(bench_inputs.Skip, "kitti_00.osm"):
+                bench_inputs.find_long_drive(os.path.join(tmp, "d"), kml=os.path.join(tmp, "elsewhere/track.kml"))
             self.make(tmp, ["elsewhere/x.osm"])
-            found = bench_cases.find_long_drive(os.path.join(tmp, "d"), os.path.join(tmp, "elsewhere/track.kml"),
+            found = bench_inputs.find_long_drive(os.path.join(tmp, "d"), os.path.join(tmp, "elsewhere/track.kml"),
                                                 os.path.join(tmp, "elsewhere/x.osm"))
             self.assertEqual(found["rtk"], os.path.join(tmp, "elsewhere", "track.kml"))
-            with self.assertRaisesRegex(bench_cases.Skip, "KITTI 00"):
-                bench_cases.find_long_drive(os.path.join(tmp, "elsewhere"))
+            with self.assertRaisesRegex(bench_inputs.Skip, "KITTI 00"):
+                bench_inputs.find_long_drive(os.path.join(tmp, "elsewhere"))
 
 
 class CityFigures(unittest.TestCase):
