@@ -3,6 +3,17 @@
 #include <cmath>
 
 namespace semslam::sim::city_parts {
+namespace {
+
+// The horizontal unit vector a box face looks along (0..3: +x, +y, -x, -y).
+Eigen::Vector2d FacingDirection(int facing) {
+  return facing == 0   ? Eigen::Vector2d(1, 0)
+         : facing == 1 ? Eigen::Vector2d(0, 1)
+         : facing == 2 ? Eigen::Vector2d(-1, 0)
+                       : Eigen::Vector2d(0, -1);
+}
+
+}  // namespace
 
 void AddTree(Builder& b, Rng& rng, double x, double y, float z0, double scale) {
   const std::uint32_t obj = b.NewObject("tree", SemanticClass::kVegetation);
@@ -33,10 +44,7 @@ void AddTrafficLight(Builder& b, Rng& rng, const Eigen::Vector2d& p, int facing)
              tone, Bits(rng));
   const std::uint32_t obj = b.NewObject("traffic_light", SemanticClass::kTrafficLight);
   // Housing in front of the post, facing the arriving traffic.
-  const Eigen::Vector2d n = facing == 0   ? Eigen::Vector2d(1, 0)
-                            : facing == 1 ? Eigen::Vector2d(0, 1)
-                            : facing == 2 ? Eigen::Vector2d(-1, 0)
-                                          : Eigen::Vector2d(0, -1);
+  const Eigen::Vector2d n = FacingDirection(facing);
   const Eigen::Vector2d c = p + n * 0.2;
   const Eigen::Vector2d half(std::abs(n.x()) * 0.13 + std::abs(n.y()) * 0.17,
                              std::abs(n.y()) * 0.13 + std::abs(n.x()) * 0.17);
@@ -53,10 +61,7 @@ void AddTrafficSign(Builder& b, Rng& rng, const Eigen::Vector2d& p, int facing) 
   b.Cylinder(post, Material::kPole, SemanticClass::kPole, F(p.x()), F(p.y()), 0.04f, kSidewalkHeight,
              top - 0.2f, tone, Bits(rng));
   const std::uint32_t obj = b.NewObject("traffic_sign", SemanticClass::kTrafficSign);
-  const Eigen::Vector2d n = facing == 0   ? Eigen::Vector2d(1, 0)
-                            : facing == 1 ? Eigen::Vector2d(0, 1)
-                            : facing == 2 ? Eigen::Vector2d(-1, 0)
-                                          : Eigen::Vector2d(0, -1);
+  const Eigen::Vector2d n = FacingDirection(facing);
   const Eigen::Vector2d c = p + n * 0.07;
   const double w = rng.Uniform(0.3, 0.4);
   const Eigen::Vector2d half(std::abs(n.x()) * 0.02 + std::abs(n.y()) * w,
