@@ -24,10 +24,10 @@ using city_parts::Bits;
 using city_parts::Builder;
 using city_parts::DrawLook;
 using city_parts::F;
-using city_parts::kGrassTop;
 using city_parts::kSidewalkHeight;
-using city_parts::Label;
 using city_parts::Look;
+
+constexpr float kGrassTop = 0.19f;  // a lawn's top, above the sidewalk
 
 // Named places of the town, drawn without repetition.
 struct PlaceName {

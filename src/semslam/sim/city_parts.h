@@ -14,9 +14,7 @@
 namespace semslam::sim::city_parts {
 
 constexpr float kSidewalkHeight = 0.15f;
-constexpr float kGrassTop = 0.19f;
 
-constexpr std::uint8_t Label(SemanticClass c) { return static_cast<std::uint8_t>(c); }
 inline std::uint32_t Bits(Rng& rng) { return static_cast<std::uint32_t>(rng.Next() >> 32); }
 inline float F(double v) { return static_cast<float>(v); }
 
@@ -40,7 +38,7 @@ class Builder {
   explicit Builder(City& city) : city_(city) {}
 
   std::uint32_t NewObject(const std::string& kind, SemanticClass label, const std::string& name = {}) {
-    city_.objects.push_back({kind, Label(label), name});
+    city_.objects.push_back({kind, static_cast<std::uint8_t>(TrainId(label)), name});
     return static_cast<std::uint32_t>(city_.objects.size() - 1);
   }
   Primitive& Box(std::uint32_t object, Material material, SemanticClass label, const Eigen::Vector3f& lo,
@@ -48,7 +46,7 @@ class Builder {
     Primitive p;
     p.shape = Shape::kBox;
     p.material = material;
-    p.label = Label(label);
+    p.label = static_cast<std::uint8_t>(TrainId(label));
     p.object = object;
     p.lo = lo.cwiseMin(hi);
     p.hi = lo.cwiseMax(hi);
