@@ -9,6 +9,7 @@
 #include "semslam/features/matching.h"
 #include "semslam/features/orb_extractor.h"
 #include "semslam/semantics/class_table.h"
+#include "semslam/sim/pattern_filter.h"
 #include "semslam/sim/raycaster.h"
 #include "semslam/sim/renderer.h"
 #include "semslam/sim/synthetic_city.h"

@@ -3,159 +3,17 @@
 #include <algorithm>
 #include <cmath>
 
+#include "semslam/sim/pattern_filter.h"
 #include "semslam/sim/random.h"
 
 namespace semslam::sim {
 namespace {
 
-// Filters span this many pixel footprints: enough to keep sub-pixel patterns from shimmering.
-constexpr float kFilterPixels = 1.5f;
+using namespace pattern;
 
-inline float Clamp01(float v) { return std::min(1.0f, std::max(0.0f, v)); }
-inline float Mix(float a, float b, float t) { return a + (b - a) * t; }
-inline float SmoothStep(float e0, float e1, float x) {
-  const float t = Clamp01((x - e0) / (e1 - e0));
-  return t * t * (3.0f - 2.0f * t);
-}
-// Weight of a detail of size `feature` (metres) seen with footprint `fp`: 1 when it spans >= 4 pixels, 0
-// at <= 2 pixels.
-inline float Detail(float feature, float fp) {
-  return Clamp01((feature / std::max(fp, 1e-6f) - 2.0f) * 0.5f);
-}
 inline float HashSigned(std::uint32_t h) { return HashToUnit(h) * 2.0f - 1.0f; }
 inline int FloorInt(float v) { return static_cast<int>(std::floor(v)); }
 inline std::uint32_t U(int v) { return static_cast<std::uint32_t>(v); }
-
-// Footprint along one in-plane axis of a planar surface: w * sqrt(1 + (d_a / d_n)^2).
-inline float AxisFootprint(float w, float d_axis, float d_normal) {
-  const float dn = std::max(std::abs(d_normal), 0.03f);
-  return w * std::sqrt(1.0f + (d_axis * d_axis) / (dn * dn));
-}
-
-// Coverage of a disc of radius r at distance d from its centre, filtered over `w`.
-inline float DiscCoverage(float d, float r, float w) { return Clamp01((r - d) / std::max(w, 1e-4f) + 0.5f); }
-
-// Lattice values for the noise: a permutation of 0..255 (twice, to skip a wrap) and 256 values in [-1, 1],
-// drawn once from a fixed seed.
-struct NoiseTable {
-  std::uint8_t perm[512];
-  float value[256];
-  NoiseTable() {
-    std::uint8_t p[256];
-    for (int i = 0; i < 256; ++i) p[i] = static_cast<std::uint8_t>(i);
-    std::uint64_t state = 0x5EED5EEDull;
-    for (int i = 255; i > 0; --i) {
-      state = Mix64(state);
-      const int j = static_cast<int>(state % static_cast<std::uint64_t>(i + 1));
-      std::swap(p[i], p[j]);
-    }
-    for (int i = 0; i < 512; ++i) perm[i] = p[i & 255];
-    for (int i = 0; i < 256; ++i) {
-      state = Mix64(state);
-      value[i] = static_cast<float>(state >> 40) * (2.0f / 16777216.0f) - 1.0f;
-    }
-  }
-};
-const NoiseTable& Table() {
-  static const NoiseTable table;
-  return table;
-}
-
-inline float PulseCoverageImpl(float x, float period, float width, float w) {
-  if (w < 1e-6f) {
-    const float f = x - std::floor(x / period) * period;
-    return f < width ? 1.0f : 0.0f;
-  }
-  if (w < period) {
-    // The window [x - w/2, x + w/2] meets at most the pulses of periods k - 1, k and k + 1.
-    const float local = x - std::floor(x / period) * period;
-    const float a = local - 0.5f * w, b = local + 0.5f * w;
-    auto overlap = [&](float lo) { return std::max(0.0f, std::min(b, lo + width) - std::max(a, lo)); };
-    return Clamp01((overlap(-period) + overlap(0.0f) + overlap(period)) / w);
-  }
-  if (w >= period * 8.0f) return width / period;  // fully averaged
-  auto integral = [&](float v) {
-    const float n = std::floor(v / period);
-    return n * width + std::min(v - n * period, width);
-  };
-  return Clamp01((integral(x + 0.5f * w) - integral(x - 0.5f * w)) / w);
-}
-
-inline float IntervalCoverageImpl(float x, float a, float b, float w) {
-  if (w < 1e-6f) return (x >= a && x < b) ? 1.0f : 0.0f;
-  return Clamp01((std::min(x + 0.5f * w, b) - std::max(x - 0.5f * w, a)) / w);
-}
-
-inline float ValueNoise2Impl(float x, float y, std::uint32_t seed) {
-  const NoiseTable& nt = Table();
-  const float fx = std::floor(x), fy = std::floor(y);
-  const int ix = (static_cast<int>(fx) + static_cast<int>(seed & 255u)) & 255;
-  const int iy = (static_cast<int>(fy) + static_cast<int>((seed >> 8) & 255u)) & 255;
-  float tx = x - fx, ty = y - fy;
-  tx = tx * tx * (3.0f - 2.0f * tx);
-  ty = ty * ty * (3.0f - 2.0f * ty);
-  const int a = nt.perm[ix], b = nt.perm[ix + 1];
-  const float v00 = nt.value[nt.perm[a + iy]], v10 = nt.value[nt.perm[b + iy]];
-  const float v01 = nt.value[nt.perm[a + iy + 1]], v11 = nt.value[nt.perm[b + iy + 1]];
-  return Mix(Mix(v00, v10, tx), Mix(v01, v11, tx), ty);
-}
-
-inline float ValueNoise3Impl(float x, float y, float z, std::uint32_t seed) {
-  const NoiseTable& nt = Table();
-  const float fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
-  const int ix = (static_cast<int>(fx) + static_cast<int>(seed & 255u)) & 255;
-  const int iy = (static_cast<int>(fy) + static_cast<int>((seed >> 8) & 255u)) & 255;
-  const int iz = (static_cast<int>(fz) + static_cast<int>((seed >> 16) & 255u)) & 255;
-  float tx = x - fx, ty = y - fy, tz = z - fz;
-  tx = tx * tx * (3.0f - 2.0f * tx);
-  ty = ty * ty * (3.0f - 2.0f * ty);
-  tz = tz * tz * (3.0f - 2.0f * tz);
-  const int a = nt.perm[ix], b = nt.perm[ix + 1];
-  const int aa = nt.perm[a + iy], ab = nt.perm[a + iy + 1], ba = nt.perm[b + iy], bb = nt.perm[b + iy + 1];
-  auto v = [&](int h, int dz) { return nt.value[nt.perm[h + iz + dz]]; };
-  const float x00 = Mix(v(aa, 0), v(ba, 0), tx), x10 = Mix(v(ab, 0), v(bb, 0), tx);
-  const float x01 = Mix(v(aa, 1), v(ba, 1), tx), x11 = Mix(v(ab, 1), v(bb, 1), tx);
-  return Mix(Mix(x00, x10, ty), Mix(x01, x11, ty), tz);
-}
-
-inline float FilteredNoise2Impl(float x, float y, std::uint32_t seed, float frequency, int octaves,
-                                float footprint) {
-  float sum = 0, norm = 0, amplitude = 1, f = frequency;
-  for (int o = 0; o < octaves; ++o) {
-    const float weight = Detail(1.0f / f, footprint);
-    if (weight > 0)
-      sum +=
-          amplitude * weight * ValueNoise2Impl(x * f, y * f, seed + static_cast<std::uint32_t>(o) * 0x2F1B3u);
-    norm += amplitude;
-    amplitude *= 0.55f;
-    f *= 2.0f;
-    if (weight == 0) {
-      for (int r = o + 1; r < octaves; ++r) {
-        norm += amplitude;
-        amplitude *= 0.55f;
-      }
-      break;
-    }
-  }
-  return sum / norm * 1.6f;
-}
-
-inline float FilteredNoise3Impl(const Eigen::Vector3f& p, std::uint32_t seed, float frequency, int octaves,
-                                float footprint) {
-  float sum = 0, norm = 0, amplitude = 1, f = frequency;
-  for (int o = 0; o < octaves; ++o) {
-    const float weight = Detail(1.0f / f, footprint);
-    if (weight > 0) {
-      sum +=
-          amplitude * weight *
-          ValueNoise3Impl(p.x() * f, p.y() * f, p.z() * f, seed + static_cast<std::uint32_t>(o) * 0x2F1B3u);
-    }
-    norm += amplitude;
-    amplitude *= 0.55f;
-    f *= 2.0f;
-  }
-  return sum / norm * 1.6f;
-}
 
 // In-plane coordinates of a box face: u horizontal (or x on top faces), v vertical (or y), with footprints.
 struct FaceCoords {
@@ -197,9 +55,9 @@ float Brick(float u, float v, float fu, float fv, float base, std::uint32_t seed
   const float detail = Detail(kRow, fv);
   const int row = FloorInt(v / kRow);
   const float shift = (row & 1) ? 0.5f * kLength : 0.0f;
-  const float mortar_h = PulseCoverageImpl(v, kRow, kMortar, fv);
+  const float mortar_h = PulseCoverage(v, kRow, kMortar, fv);
   const float mortar_v =
-      PulseCoverageImpl(u + shift, kLength, kMortar, fu) * detail + (1.0f - detail) * (kMortar / kLength);
+      PulseCoverage(u + shift, kLength, kMortar, fu) * detail + (1.0f - detail) * (kMortar / kLength);
   const float mortar = mortar_h + mortar_v - mortar_h * mortar_v;
   const int col = FloorInt((u + shift) / kLength);
   const float brick_var =
@@ -210,10 +68,10 @@ float Brick(float u, float v, float fu, float fv, float base, std::uint32_t seed
 
 float Plaster(float u, float v, float fu, float fv, float base, float floor_height, std::uint32_t seed) {
   const float fp = std::max(fu, fv);
-  float g = base * (1.0f + 0.07f * FilteredNoise2Impl(u, v, seed, 0.35f, 3, fp) +
-                    0.05f * FilteredNoise2Impl(u, v, seed + 7, 6.0f, 3, fp));
+  float g = base * (1.0f + 0.07f * FilteredNoise2(u, v, seed, 0.35f, 3, fp) +
+                    0.05f * FilteredNoise2(u, v, seed + 7, 6.0f, 3, fp));
   // Cornice bands at the floor lines.
-  const float band = PulseCoverageImpl(v + 0.1f, floor_height, 0.18f, fv);
+  const float band = PulseCoverage(v + 0.1f, floor_height, 0.18f, fv);
   return Mix(g, std::min(250.0f, base * 1.18f + 10.0f), band);
 }
 
@@ -227,8 +85,7 @@ float FacadeWall(const City& city, const Primitive& p, const FaceCoords& f, std:
 float Facade(const City& city, const Primitive& p, const SurfaceSample& s) {
   if (s.axis == 2) {  // roof
     const float fp = kFilterPixels * s.t * s.pixel_size;
-    return 80.0f + 20.0f * p.tone +
-           10.0f * FilteredNoise2Impl(s.point.x(), s.point.y(), p.variant, 1.0f, 4, fp);
+    return 80.0f + 20.0f * p.tone + 10.0f * FilteredNoise2(s.point.x(), s.point.y(), p.variant, 1.0f, 4, fp);
   }
   const FacadeStyle& st = city.styles[p.style];
   const FaceCoords f = BoxFace(p, s);
@@ -238,7 +95,7 @@ float Facade(const City& city, const Primitive& p, const SurfaceSample& s) {
   const bool ground_box = p.lo.z() < 1.0f;
   const float fh = st.floor_height;
   // Plinth.
-  if (ground_box) g = Mix(g, g * 0.68f, IntervalCoverageImpl(f.v, -1.0f, st.plinth_height, f.fv));
+  if (ground_box) g = Mix(g, g * 0.68f, IntervalCoverage(f.v, -1.0f, st.plinth_height, f.fv));
 
   // Window grid.
   const float period = st.window_period;
@@ -247,22 +104,21 @@ float Facade(const City& city, const Primitive& p, const SurfaceSample& s) {
     const float offset = 0.5f * (f.width - static_cast<float>(columns) * period);
     const float ww = st.window_width, wh = st.window_height, fw = st.frame_width;
     const float first_row = ground_box ? fh : 0.0f;
-    const float rows_on = IntervalCoverageImpl(f.v, first_row, f.height - 0.5f, f.fv);
+    const float rows_on = IntervalCoverage(f.v, first_row, f.height - 0.5f, f.fv);
     const float row_frame =
-        rows_on > 0 ? PulseCoverageImpl(f.v - st.sill_height + fw, fh, wh + 2 * fw, f.fv) * rows_on : 0.0f;
+        rows_on > 0 ? PulseCoverage(f.v - st.sill_height + fw, fh, wh + 2 * fw, f.fv) * rows_on : 0.0f;
     const float row_sill =
-        rows_on > 0 ? PulseCoverageImpl(f.v - st.sill_height + fw + 0.07f, fh, 0.07f, f.fv) * rows_on : 0.0f;
+        rows_on > 0 ? PulseCoverage(f.v - st.sill_height + fw + 0.07f, fh, 0.07f, f.fv) * rows_on : 0.0f;
     if (row_frame > 0 || row_sill > 0) {
-      const float inside = IntervalCoverageImpl(f.u, offset, f.width - offset, f.fu);
-      const float col_sill = PulseCoverageImpl(f.u - offset - 0.5f * (period - ww) + fw + 0.08f, period,
-                                               ww + 2 * fw + 0.16f, f.fu) *
-                             inside;
+      const float inside = IntervalCoverage(f.u, offset, f.width - offset, f.fu);
+      const float col_sill =
+          PulseCoverage(f.u - offset - 0.5f * (period - ww) + fw + 0.08f, period, ww + 2 * fw + 0.16f, f.fu) *
+          inside;
       if (col_sill > 0) {
-        const float col_glass =
-            PulseCoverageImpl(f.u - offset - 0.5f * (period - ww), period, ww, f.fu) * inside;
+        const float col_glass = PulseCoverage(f.u - offset - 0.5f * (period - ww), period, ww, f.fu) * inside;
         const float col_frame =
-            PulseCoverageImpl(f.u - offset - 0.5f * (period - ww) + fw, period, ww + 2 * fw, f.fu) * inside;
-        const float row_glass = PulseCoverageImpl(f.v - st.sill_height, fh, wh, f.fv) * rows_on;
+            PulseCoverage(f.u - offset - 0.5f * (period - ww) + fw, period, ww + 2 * fw, f.fu) * inside;
+        const float row_glass = PulseCoverage(f.v - st.sill_height, fh, wh, f.fv) * rows_on;
         // Glass varies per window (reflections, curtains); the variation fades with the window size.
         const int col = FloorInt((f.u - offset) / period);
         const int row = FloorInt(f.v / fh);
@@ -272,14 +128,14 @@ float Facade(const City& city, const Primitive& p, const SurfaceSample& s) {
         float glass = st.glass_grey + 28.0f * var + 18.0f * Clamp01(var);
         // Lighter curtain in the upper part of some windows.
         if (var > 0.3f) {
-          glass = Mix(glass, 150.0f,
-                      IntervalCoverageImpl(local_v, wh * 0.65f, wh, f.fv) * Detail(wh * 0.3f, f.fv));
+          glass =
+              Mix(glass, 150.0f, IntervalCoverage(local_v, wh * 0.65f, wh, f.fv) * Detail(wh * 0.3f, f.fv));
         }
         // Mullion (wide windows) and transom.
         const float local_u = f.u - offset - static_cast<float>(col) * period - 0.5f * period;
         float bars = 0;
-        if (ww > 1.2f) bars = IntervalCoverageImpl(local_u, -0.5f * fw, 0.5f * fw, f.fu);
-        bars = std::max(bars, IntervalCoverageImpl(local_v, wh * 0.7f, wh * 0.7f + fw * 0.7f, f.fv));
+        if (ww > 1.2f) bars = IntervalCoverage(local_u, -0.5f * fw, 0.5f * fw, f.fu);
+        bars = std::max(bars, IntervalCoverage(local_v, wh * 0.7f, wh * 0.7f + fw * 0.7f, f.fv));
         bars *= Detail(fw, std::max(f.fu, f.fv));
         g = Mix(g, std::min(250.0f, st.frame_grey * 0.9f + 20.0f), col_sill * row_sill);
         g = Mix(g, st.frame_grey, col_frame * row_frame);
@@ -292,31 +148,31 @@ float Facade(const City& city, const Primitive& p, const SurfaceSample& s) {
     // Door: one per face, placed by the variant bits.
     const float door_w = 1.3f;
     const float door_u = 0.8f + HashToUnit(Hash32(p.variant, 17u)) * std::max(0.0f, f.width - 1.6f - door_w);
-    const float door = IntervalCoverageImpl(f.u, door_u, door_u + door_w, f.fu) *
-                       IntervalCoverageImpl(f.v, -1.0f, 2.3f, f.fv);
-    const float door_frame = IntervalCoverageImpl(f.u, door_u - 0.12f, door_u + door_w + 0.12f, f.fu) *
-                             IntervalCoverageImpl(f.v, -1.0f, 2.42f, f.fv);
+    const float door =
+        IntervalCoverage(f.u, door_u, door_u + door_w, f.fu) * IntervalCoverage(f.v, -1.0f, 2.3f, f.fv);
+    const float door_frame = IntervalCoverage(f.u, door_u - 0.12f, door_u + door_w + 0.12f, f.fu) *
+                             IntervalCoverage(f.v, -1.0f, 2.42f, f.fv);
     if (st.shop_front) {
       // Shop windows and a sign band with letters.
       const float band_lo = fh - 0.8f, band_hi = fh - 0.2f;
-      const float shop = IntervalCoverageImpl(f.u, 0.6f, f.width - 0.6f, f.fu) *
-                         IntervalCoverageImpl(f.v, 0.5f, band_lo - 0.15f, f.fv);
-      const float shop_frame = IntervalCoverageImpl(f.u, 0.45f, f.width - 0.45f, f.fu) *
-                               IntervalCoverageImpl(f.v, 0.35f, band_lo - 0.02f, f.fv);
-      const float posts = PulseCoverageImpl(f.u - 0.6f, 2.4f, 0.1f, f.fu) * Detail(0.1f, f.fu);
+      const float shop = IntervalCoverage(f.u, 0.6f, f.width - 0.6f, f.fu) *
+                         IntervalCoverage(f.v, 0.5f, band_lo - 0.15f, f.fv);
+      const float shop_frame = IntervalCoverage(f.u, 0.45f, f.width - 0.45f, f.fu) *
+                               IntervalCoverage(f.v, 0.35f, band_lo - 0.02f, f.fv);
+      const float posts = PulseCoverage(f.u - 0.6f, 2.4f, 0.1f, f.fu) * Detail(0.1f, f.fu);
       const float reflection =
-          25.0f * FilteredNoise2Impl(f.u * 0.4f, f.v, p.variant + 3, 0.8f, 2, std::max(f.fu, f.fv));
+          25.0f * FilteredNoise2(f.u * 0.4f, f.v, p.variant + 3, 0.8f, 2, std::max(f.fu, f.fv));
       g = Mix(g, st.frame_grey * 0.8f, shop_frame);
       g = Mix(g, Mix(st.glass_grey + 20.0f + reflection, st.frame_grey * 0.8f, posts), shop);
-      const float band = IntervalCoverageImpl(f.u, 0.4f, f.width - 0.4f, f.fu) *
-                         IntervalCoverageImpl(f.v, band_lo, band_hi, f.fv);
+      const float band =
+          IntervalCoverage(f.u, 0.4f, f.width - 0.4f, f.fu) * IntervalCoverage(f.v, band_lo, band_hi, f.fv);
       const float letter_cell = 0.42f;
       const int cell = FloorInt(f.u / letter_cell);
       const float text_lo = f.width * 0.2f, text_hi = f.width * 0.8f;
       const bool present = (Hash32(U(cell), p.variant, 23u) & 3u) != 0u;
-      float letter = present ? PulseCoverageImpl(f.u - 0.06f, letter_cell, letter_cell - 0.12f, f.fu) *
-                                   IntervalCoverageImpl(f.v, band_lo + 0.12f, band_hi - 0.12f, f.fv) *
-                                   IntervalCoverageImpl(f.u, text_lo, text_hi, f.fu)
+      float letter = present ? PulseCoverage(f.u - 0.06f, letter_cell, letter_cell - 0.12f, f.fu) *
+                                   IntervalCoverage(f.v, band_lo + 0.12f, band_hi - 0.12f, f.fv) *
+                                   IntervalCoverage(f.u, text_lo, text_hi, f.fu)
                              : 0.0f;
       letter *= Detail(letter_cell * 0.5f, std::max(f.fu, f.fv));
       const float ink = st.sign_grey > 128 ? 35.0f : 230.0f;
@@ -332,8 +188,8 @@ float Sidewalk(const Primitive& p, const SurfaceSample& s) {
   if (s.axis != 2) {  // curb stone
     const FaceCoords f = BoxFace(p, s);
     const float fp = std::max(f.fu, f.fv);
-    float g = 170.0f + 14.0f * FilteredNoise2Impl(f.u, f.v, p.variant, 4.0f, 4, fp);
-    g = Mix(g, g * 0.75f, PulseCoverageImpl(f.u, 1.0f, 0.01f, f.fu));  // joints between curb stones
+    float g = 170.0f + 14.0f * FilteredNoise2(f.u, f.v, p.variant, 4.0f, 4, fp);
+    g = Mix(g, g * 0.75f, PulseCoverage(f.u, 1.0f, 0.01f, f.fu));  // joints between curb stones
     return g;
   }
   const float w = s.t * s.pixel_size;
@@ -341,33 +197,32 @@ float Sidewalk(const Primitive& p, const SurfaceSample& s) {
   const float fy = kFilterPixels * AxisFootprint(w, s.dir.y(), s.dir.z());
   const float x = s.point.x(), y = s.point.y();
   // Curb edge: a light band along the slab border.
-  const float edge = 1.0f - IntervalCoverageImpl(x, p.lo.x() + 0.25f, p.hi.x() - 0.25f, fx) *
-                                IntervalCoverageImpl(y, p.lo.y() + 0.25f, p.hi.y() - 0.25f, fy);
+  const float edge = 1.0f - IntervalCoverage(x, p.lo.x() + 0.25f, p.hi.x() - 0.25f, fx) *
+                                IntervalCoverage(y, p.lo.y() + 0.25f, p.hi.y() - 0.25f, fy);
   const float tile = (p.variant & 1u) ? 0.3f : 0.45f;
-  const float joint_x = PulseCoverageImpl(x, tile, 0.014f, fx);
-  const float joint_y = PulseCoverageImpl(y, tile, 0.014f, fy);
+  const float joint_x = PulseCoverage(x, tile, 0.014f, fx);
+  const float joint_y = PulseCoverage(y, tile, 0.014f, fy);
   const float joint = joint_x + joint_y - joint_x * joint_y;
   const float fp = std::max(fx, fy);
   const float tile_var =
       16.0f * HashSigned(Hash32(U(FloorInt(x / tile)), U(FloorInt(y / tile)), p.variant)) * Detail(tile, fp);
-  float g = 132.0f + 25.0f * p.tone + tile_var + 9.0f * FilteredNoise2Impl(x, y, p.variant, 8.0f, 4, fp) +
-            8.0f * FilteredNoise2Impl(x, y, p.variant + 1, 0.2f, 2, fp);
+  float g = 132.0f + 25.0f * p.tone + tile_var + 9.0f * FilteredNoise2(x, y, p.variant, 8.0f, 4, fp) +
+            8.0f * FilteredNoise2(x, y, p.variant + 1, 0.2f, 2, fp);
   g = Mix(g, g * 0.55f, joint);
   return Mix(g, 185.0f, edge);
 }
 
 float Grass(const Primitive& p, const SurfaceSample& s) {
   const float fp = kFilterPixels * s.t * s.pixel_size / std::max(std::abs(s.dir.z()), 0.25f);
-  return 88.0f + 14.0f * p.tone +
-         26.0f * FilteredNoise2Impl(s.point.x(), s.point.y(), p.variant, 3.0f, 4, fp) +
-         14.0f * FilteredNoise2Impl(s.point.x(), s.point.y(), p.variant + 5, 0.15f, 2, fp);
+  return 88.0f + 14.0f * p.tone + 26.0f * FilteredNoise2(s.point.x(), s.point.y(), p.variant, 3.0f, 4, fp) +
+         14.0f * FilteredNoise2(s.point.x(), s.point.y(), p.variant + 5, 0.15f, 2, fp);
 }
 
 float Foliage(const Primitive& p, const SurfaceSample& s) {
   const float fp = CurvedFootprint(s);
   // Clusters of leaves (about a metre) made of single leaves and gaps (a few centimetres to decimetres).
-  const float clusters = FilteredNoise3Impl(s.point, p.variant, 1.3f, 2, fp);
-  const float leaves = FilteredNoise3Impl(s.point, p.variant + 77u, 5.0f, 3, fp);
+  const float clusters = FilteredNoise3(s.point, p.variant, 1.3f, 2, fp);
+  const float leaves = FilteredNoise3(s.point, p.variant + 77u, 5.0f, 3, fp);
   // A soft threshold whose softness grows with the footprint (no sharp edge below a pixel).
   const float soft = 0.12f + 3.0f * fp;
   const float leaf = SmoothStep(-soft, soft, 0.7f * clusters + 0.9f * leaves + 0.2f * (p.tone - 0.5f));
@@ -379,7 +234,7 @@ float Foliage(const Primitive& p, const SurfaceSample& s) {
 float Bark(const Primitive& p, const SurfaceSample& s) {
   const float fp = CurvedFootprint(s);
   const Eigen::Vector3f q(s.point.x() * 6.0f, s.point.y() * 6.0f, s.point.z() * 0.8f);
-  return 55.0f + 12.0f * p.tone + 14.0f * FilteredNoise3Impl(q, p.variant, 1.0f, 3, fp * 4.0f);
+  return 55.0f + 12.0f * p.tone + 14.0f * FilteredNoise3(q, p.variant, 1.0f, 3, fp * 4.0f);
 }
 
 // Horizontal coordinate around a vertical cylinder (arc length) and its height.
@@ -407,38 +262,38 @@ float Wall(const Primitive& p, const SurfaceSample& s) {
   const int row = FloorInt(f.v / kRow);
   const float shift = (row & 1) ? 0.5f * kLength : 0.0f;
   const float detail = Detail(kRow, f.fv);
-  const float jh = PulseCoverageImpl(f.v, kRow, kJoint, f.fv);
+  const float jh = PulseCoverage(f.v, kRow, kJoint, f.fv);
   const float jv =
-      PulseCoverageImpl(f.u + shift, kLength, kJoint, f.fu) * detail + (1.0f - detail) * (kJoint / kLength);
+      PulseCoverage(f.u + shift, kLength, kJoint, f.fu) * detail + (1.0f - detail) * (kJoint / kLength);
   const float joint = jh + jv - jh * jv;
   const float stone =
       base * (1.0f + 0.1f * HashSigned(Hash32(U(row), U(FloorInt((f.u + shift) / kLength)), p.variant)) *
                          Detail(kLength * 0.5f, std::max(f.fu, f.fv)));
   float g = Mix(stone, base * 0.6f, joint);
-  g += 8.0f * FilteredNoise2Impl(f.u, f.v, p.variant + 9, 5.0f, 3, std::max(f.fu, f.fv));
+  g += 8.0f * FilteredNoise2(f.u, f.v, p.variant + 9, 5.0f, 3, std::max(f.fu, f.fv));
   // Coping stones on top.
   return Mix(g, std::min(240.0f, base * 1.35f),
-             IntervalCoverageImpl(f.v, f.height - 0.09f, f.height + 1.0f, f.fv));
+             IntervalCoverage(f.v, f.height - 0.09f, f.height + 1.0f, f.fv));
 }
 
 float Fence(const Primitive& p, const SurfaceSample& s) {
   const FaceCoords f = BoxFace(p, s);
   const float wood = 135.0f + 70.0f * p.tone;
   if (s.axis == 2) return wood;
-  const float slats = PulseCoverageImpl(f.u, 0.14f, 0.095f, f.fu);
-  const float rails = std::max(IntervalCoverageImpl(f.v, 0.22f, 0.32f, f.fv),
-                               IntervalCoverageImpl(f.v, f.height - 0.32f, f.height - 0.22f, f.fv));
+  const float slats = PulseCoverage(f.u, 0.14f, 0.095f, f.fu);
+  const float rails = std::max(IntervalCoverage(f.v, 0.22f, 0.32f, f.fv),
+                               IntervalCoverage(f.v, f.height - 0.32f, f.height - 0.22f, f.fv));
   float g = Mix(42.0f, wood, slats);
   g = Mix(g, wood * 0.85f, rails);
-  return g + 7.0f * FilteredNoise2Impl(f.u * 0.3f, f.v * 3.0f, p.variant, 4.0f, 2, std::max(f.fu, f.fv));
+  return g + 7.0f * FilteredNoise2(f.u * 0.3f, f.v * 3.0f, p.variant, 4.0f, 2, std::max(f.fu, f.fv));
 }
 
 float Pole(const Primitive& p, const SurfaceSample& s) {
   const FaceCoords f = AnyFace(p, s);
   const float base = 95.0f + 90.0f * p.tone;
   // Darker foot and a reflective band at eye height.
-  float g = Mix(base, base * 0.6f, IntervalCoverageImpl(f.v, -1.0f, 0.45f, f.fv));
-  g = Mix(g, 225.0f, IntervalCoverageImpl(f.v, 1.9f, 2.1f, f.fv) * ((p.variant & 3u) == 0u ? 1.0f : 0.0f));
+  float g = Mix(base, base * 0.6f, IntervalCoverage(f.v, -1.0f, 0.45f, f.fv));
+  g = Mix(g, 225.0f, IntervalCoverage(f.v, 1.9f, 2.1f, f.fv) * ((p.variant & 3u) == 0u ? 1.0f : 0.0f));
   return g;
 }
 
@@ -478,13 +333,13 @@ float Sign(const Primitive& p, const SurfaceSample& s) {
     border = DiscCoverage(d, half, fw);
     plate = DiscCoverage(d, half * 0.78f, fw);
   } else {  // square sign
-    border = IntervalCoverageImpl(du, -half, half, f.fu) * IntervalCoverageImpl(dv, -half, half, f.fv);
-    plate = IntervalCoverageImpl(du, -half * 0.85f, half * 0.85f, f.fu) *
-            IntervalCoverageImpl(dv, -half * 0.85f, half * 0.85f, f.fv);
+    border = IntervalCoverage(du, -half, half, f.fu) * IntervalCoverage(dv, -half, half, f.fv);
+    plate = IntervalCoverage(du, -half * 0.85f, half * 0.85f, f.fu) *
+            IntervalCoverage(dv, -half * 0.85f, half * 0.85f, f.fv);
   }
   if (p.variant & 2u) {  // bar
-    symbol = IntervalCoverageImpl(du, -half * 0.5f, half * 0.5f, f.fu) *
-             IntervalCoverageImpl(dv, -half * 0.14f, half * 0.14f, f.fv);
+    symbol = IntervalCoverage(du, -half * 0.5f, half * 0.5f, f.fu) *
+             IntervalCoverage(dv, -half * 0.14f, half * 0.14f, f.fv);
   } else {  // dot
     symbol = DiscCoverage(std::hypot(du, dv), half * 0.3f, fw);
   }
@@ -503,32 +358,32 @@ float CarBody(const Primitive& p, const SurfaceSample& s, bool cabin) {
   const bool end_face = s.axis == long_axis;
   if (cabin) {
     // Glass with pillars at both ends and in the middle.
-    const float glass = IntervalCoverageImpl(f.u, 0.12f, f.width - 0.12f, f.fu) *
-                        IntervalCoverageImpl(f.v, 0.04f, f.height - 0.07f, f.fv);
+    const float glass = IntervalCoverage(f.u, 0.12f, f.width - 0.12f, f.fu) *
+                        IntervalCoverage(f.v, 0.04f, f.height - 0.07f, f.fv);
     const float pillar =
-        end_face ? 0.0f : IntervalCoverageImpl(f.u, 0.45f * f.width, 0.45f * f.width + 0.1f, f.fu);
-    return Mix(paint, 30.0f + 25.0f * FilteredNoise2Impl(f.u, f.v, p.variant, 1.5f, 2, fw),
+        end_face ? 0.0f : IntervalCoverage(f.u, 0.45f * f.width, 0.45f * f.width + 0.1f, f.fu);
+    return Mix(paint, 30.0f + 25.0f * FilteredNoise2(f.u, f.v, p.variant, 1.5f, 2, fw),
                glass * (1.0f - pillar));
   }
-  float g = Mix(paint, paint * 0.45f, IntervalCoverageImpl(f.v, -1.0f, 0.14f, f.fv));  // sill shadow
+  float g = Mix(paint, paint * 0.45f, IntervalCoverage(f.v, -1.0f, 0.14f, f.fv));  // sill shadow
   if (end_face) {
     // Lights near the corners and a licence plate in the middle.
-    const float lights = (IntervalCoverageImpl(f.u, 0.12f, 0.42f, f.fu) +
-                          IntervalCoverageImpl(f.u, f.width - 0.42f, f.width - 0.12f, f.fu)) *
-                         IntervalCoverageImpl(f.v, f.height - 0.3f, f.height - 0.14f, f.fv);
-    const float plate = IntervalCoverageImpl(f.u, 0.5f * f.width - 0.26f, 0.5f * f.width + 0.26f, f.fu) *
-                        IntervalCoverageImpl(f.v, 0.12f, 0.24f, f.fv);
+    const float lights = (IntervalCoverage(f.u, 0.12f, 0.42f, f.fu) +
+                          IntervalCoverage(f.u, f.width - 0.42f, f.width - 0.12f, f.fu)) *
+                         IntervalCoverage(f.v, f.height - 0.3f, f.height - 0.14f, f.fv);
+    const float plate = IntervalCoverage(f.u, 0.5f * f.width - 0.26f, 0.5f * f.width + 0.26f, f.fu) *
+                        IntervalCoverage(f.v, 0.12f, 0.24f, f.fv);
     g = Mix(g, (p.variant & 1u) ? 235.0f : 70.0f, lights);
     g = Mix(g, 225.0f, plate);
   } else {
     // Door seams and handles.
     const float seam =
-        Detail(0.02f, fw) * (IntervalCoverageImpl(f.u, 0.38f * f.width, 0.38f * f.width + 0.02f, f.fu) +
-                             IntervalCoverageImpl(f.u, 0.62f * f.width, 0.62f * f.width + 0.02f, f.fu));
+        Detail(0.02f, fw) * (IntervalCoverage(f.u, 0.38f * f.width, 0.38f * f.width + 0.02f, f.fu) +
+                             IntervalCoverage(f.u, 0.62f * f.width, 0.62f * f.width + 0.02f, f.fu));
     g = Mix(g, paint * 0.35f, seam);
-    const float handles = (IntervalCoverageImpl(f.u, 0.45f * f.width, 0.45f * f.width + 0.15f, f.fu) +
-                           IntervalCoverageImpl(f.u, 0.68f * f.width, 0.68f * f.width + 0.15f, f.fu)) *
-                          IntervalCoverageImpl(f.v, f.height - 0.16f, f.height - 0.12f, f.fv);
+    const float handles = (IntervalCoverage(f.u, 0.45f * f.width, 0.45f * f.width + 0.15f, f.fu) +
+                           IntervalCoverage(f.u, 0.68f * f.width, 0.68f * f.width + 0.15f, f.fu)) *
+                          IntervalCoverage(f.v, f.height - 0.16f, f.height - 0.12f, f.fv);
     g = Mix(g, paint > 120 ? 40.0f : 200.0f, handles);
   }
   return g;
@@ -550,20 +405,6 @@ int NearestLine(const std::vector<double>& lines, float v) {
 
 }  // namespace
 
-float PulseCoverage(float x, float period, float width, float w) {
-  return PulseCoverageImpl(x, period, width, w);
-}
-float IntervalCoverage(float x, float a, float b, float w) { return IntervalCoverageImpl(x, a, b, w); }
-float ValueNoise2(float x, float y, std::uint32_t seed) { return ValueNoise2Impl(x, y, seed); }
-float ValueNoise3(float x, float y, float z, std::uint32_t seed) { return ValueNoise3Impl(x, y, z, seed); }
-float FilteredNoise2(float x, float y, std::uint32_t seed, float frequency, int octaves, float footprint) {
-  return FilteredNoise2Impl(x, y, seed, frequency, octaves, footprint);
-}
-float FilteredNoise3(const Eigen::Vector3f& p, std::uint32_t seed, float frequency, int octaves,
-                     float footprint) {
-  return FilteredNoise3Impl(p, seed, frequency, octaves, footprint);
-}
-
 float ShadeGround(const City& city, const SurfaceSample& s) {
   const StreetGrid& g = city.grid;
   const float w = s.t * s.pixel_size;
@@ -573,8 +414,8 @@ float ShadeGround(const City& city, const SurfaceSample& s) {
   const float x = s.point.x(), y = s.point.y();
   const std::uint32_t seed = static_cast<std::uint32_t>(city.options.seed * 2654435761ull);
   // Asphalt: fine grain, larger stains, and repaired patches.
-  float asphalt = 88.0f + 20.0f * FilteredNoise2Impl(x, y, seed, 3.0f, 5, fp) +
-                  9.0f * FilteredNoise2Impl(x, y, seed + 1, 0.08f, 3, fp);
+  float asphalt = 88.0f + 20.0f * FilteredNoise2(x, y, seed, 3.0f, 5, fp) +
+                  9.0f * FilteredNoise2(x, y, seed + 1, 0.08f, 3, fp);
   {
     constexpr float kCell = 11.0f;
     const int cx = FloorInt(x / kCell), cy = FloorInt(y / kCell);
@@ -583,7 +424,7 @@ float ShadeGround(const City& city, const SurfaceSample& s) {
       const float px = (static_cast<float>(cx) + 0.1f + 0.4f * HashToUnit(Hash32(h, 1u))) * kCell;
       const float py = (static_cast<float>(cy) + 0.1f + 0.4f * HashToUnit(Hash32(h, 2u))) * kCell;
       const float sx = 0.8f + 3.5f * HashToUnit(Hash32(h, 3u)), sy = 0.8f + 3.5f * HashToUnit(Hash32(h, 4u));
-      const float patch = IntervalCoverageImpl(x, px, px + sx, fx) * IntervalCoverageImpl(y, py, py + sy, fy);
+      const float patch = IntervalCoverage(x, px, px + sx, fx) * IntervalCoverage(y, py, py + sy, fy);
       asphalt = Mix(asphalt, asphalt + ((h & 4u) ? 16.0f : -14.0f), patch);
     }
   }
@@ -605,23 +446,23 @@ float ShadeGround(const City& city, const SurfaceSample& s) {
   const float zebra_lo = rw + 1.0f, zebra_hi = rw + 4.5f;
   if (to_cross > zebra_hi + 1.5f) {
     // Dashed centre line and the solid lines of the parking strips.
-    const float centre = IntervalCoverageImpl(across, -0.075f, 0.075f, f_across) *
-                         PulseCoverageImpl(along, 9.0f, 4.5f, f_along);
+    const float centre =
+        IntervalCoverage(across, -0.075f, 0.075f, f_across) * PulseCoverage(along, 9.0f, 4.5f, f_along);
     const float pi = static_cast<float>(g.parking_inner);
-    const float edges = IntervalCoverageImpl(std::abs(across), pi - 0.06f, pi + 0.06f, f_across);
+    const float edges = IntervalCoverage(std::abs(across), pi - 0.06f, pi + 0.06f, f_across);
     paint = std::max(centre, edges);
     // Stop line before the crossing, on the arriving lane.
-    const float stop = IntervalCoverageImpl(to_cross, zebra_hi + 1.6f, zebra_hi + 2.1f, f_along) *
-                       IntervalCoverageImpl(across * ahead, 0.1f, pi, f_across);
+    const float stop = IntervalCoverage(to_cross, zebra_hi + 1.6f, zebra_hi + 2.1f, f_along) *
+                       IntervalCoverage(across * ahead, 0.1f, pi, f_across);
     paint = std::max(paint, stop);
   } else if (to_cross >= zebra_lo - 0.5f) {
     // Zebra crossing: stripes along the street, side by side across it.
-    paint = IntervalCoverageImpl(to_cross, zebra_lo, zebra_hi, f_along) *
-            PulseCoverageImpl(across + 0.25f, 1.0f, 0.5f, f_across) *
-            IntervalCoverageImpl(across, -rw + 0.4f, rw - 0.4f, f_across);
+    paint = IntervalCoverage(to_cross, zebra_lo, zebra_hi, f_along) *
+            PulseCoverage(across + 0.25f, 1.0f, 0.5f, f_across) *
+            IntervalCoverage(across, -rw + 0.4f, rw - 0.4f, f_across);
   }
   if (paint <= 0.0f) return asphalt;
-  const float worn = 0.85f + 0.15f * FilteredNoise2Impl(x, y, seed + 4, 2.0f, 2, fp);
+  const float worn = 0.85f + 0.15f * FilteredNoise2(x, y, seed + 4, 2.0f, 2, fp);
   return Mix(asphalt, 218.0f * worn, paint);
 }
 
@@ -634,7 +475,7 @@ float ShadePrimitive(const City& city, const Primitive& p, const SurfaceSample& 
     case Material::kRoof: {
       const float fp = kFilterPixels * s.t * s.pixel_size;
       return 75.0f + 25.0f * p.tone +
-             10.0f * FilteredNoise2Impl(s.point.x() + s.point.z(), s.point.y(), p.variant, 1.0f, 3, fp);
+             10.0f * FilteredNoise2(s.point.x() + s.point.z(), s.point.y(), p.variant, 1.0f, 3, fp);
     }
     case Material::kWall:
       return Wall(p, s);

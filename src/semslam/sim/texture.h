@@ -26,18 +26,4 @@ float ShadeGround(const City& city, const SurfaceSample& s);
 // Reflectance of a primitive's surface.
 float ShadePrimitive(const City& city, const Primitive& primitive, const SurfaceSample& s);
 
-// Filtering helpers, exposed for tests.
-// Fraction of [x - w/2, x + w/2] covered by the pulses [k * period, k * period + width), k integer.
-float PulseCoverage(float x, float period, float width, float w);
-// Fraction of [x - w/2, x + w/2] inside [a, b].
-float IntervalCoverage(float x, float a, float b, float w);
-// Value noise in [-1, 1] on a unit lattice.
-float ValueNoise2(float x, float y, std::uint32_t seed);
-float ValueNoise3(float x, float y, float z, std::uint32_t seed);
-// Octave sum of ValueNoise2 starting at `frequency` (cycles per metre), octaves whose wavelength is below
-// about two footprints `footprint` fade out. Normalized to about [-1, 1].
-float FilteredNoise2(float x, float y, std::uint32_t seed, float frequency, int octaves, float footprint);
-float FilteredNoise3(const Eigen::Vector3f& p, std::uint32_t seed, float frequency, int octaves,
-                     float footprint);
-
 }  // namespace semslam::sim
