@@ -4,6 +4,8 @@
 // the cameras stand close together, both are small and noisy, and the refined scale can land far from the
 // one the two structures give.
 
+#include "semslam/mapping/sim3_refinement.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,7 +15,6 @@
 
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
-#include "semslam/mapping/map_optimization.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {

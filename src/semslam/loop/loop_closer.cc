@@ -17,6 +17,7 @@
 #include "semslam/map/place_candidates.h"
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/mapping/map_optimization.h"
+#include "semslam/mapping/sim3_refinement.h"
 #include "semslam/optim/bundle_adjustment.h"
 #include "semslam/optim/pose_graph.h"
 #include "semslam/optim/sim3_optimization.h"

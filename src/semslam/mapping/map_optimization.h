@@ -1,15 +1,13 @@
 #pragma once
 // Bridges between the map and the optimizers: bundle-adjustment problems built from keyframes and map
-// points, global BA applied to the map, and the Sim(3) refinement of a loop.
+// points, and global BA applied to the map (the Sim(3) refinement of a loop: sim3_refinement.h).
 
 #include <atomic>
-#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
 #include <vector>
 
-#include "semslam/geometry/sim3.h"
 #include "semslam/map/map.h"
 #include "semslam/optim/bundle_adjustment.h"
 
@@ -190,31 +188,5 @@ IntrinsicsRefinement SelfCalibratingGlobalBundleAdjustment(Map& map, std::uint32
 // pixels of `camera` and undistorted with it (MakeFrameData); each keyframe then carries its ideal pinhole.
 // Write lock.
 void ExpressKeyFramesInCamera(Map& map, std::uint32_t map_id, const PinholeCamera& camera);
-
-// Refines kf1_from_kf2 by the reprojection of matched points in both keyframes; outlier matches are
-// cleared from `matches12`. Returns the inlier count. Read lock.
-int RefineSim3(const KeyFrame& kf1, const KeyFrame& kf2, std::vector<MapPoint*>& matches12,
-               Sim3d* kf1_from_kf2, double chi2_threshold, bool fix_scale);
-
-// MedianDepthRatio (geometry/sim3_solver.h) of the matched points of two keyframes under kf1_from_kf2:
-// about 1 when it aligns the two structures. nullopt without a usable match.
-std::optional<double> StructureDepthRatio(const KeyFrame& kf1, const KeyFrame& kf2,
-                                          const std::vector<MapPoint*>& matches12, const Sim3d& kf1_from_kf2);
-
-struct MonocularSim3Refinement {
-  int inliers = 0;
-  bool scale_held = false;        // the free refinement disagreed with the structures
-  double free_scale = 0.0;        // the free refinement's scale
-  double free_depth_ratio = 0.0;  // and its StructureDepthRatio (0 without a usable match)
-};
-
-// RefineSim3 with a free scale, checked against the two keyframes' own points: where the two cameras stand
-// close together, reprojection barely holds the scale, and a refinement that leaves the matched points beyond
-// `max_depth_ratio` of their own depth (StructureDepthRatio) is run again, on all the matches, with its scale
-// multiplied by that ratio and held: the scale the two structures give. Read lock.
-MonocularSim3Refinement RefineSim3KeepingStructureScale(const KeyFrame& kf1, const KeyFrame& kf2,
-                                                        std::vector<MapPoint*>& matches12,
-                                                        Sim3d* kf1_from_kf2, double chi2_threshold,
-                                                        double max_depth_ratio);
 
 }  // namespace semslam
