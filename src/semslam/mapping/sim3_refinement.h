@@ -1,6 +1,6 @@
 #pragma once
 // The Sim(3) between two keyframes refined by the reprojection of the map points they match: the loop
-// closer's and the map merger's last step after the RANSAC.
+// closer's last step after the RANSAC, for a loop and for a merge of two maps.
 
 #include <optional>
 #include <vector>

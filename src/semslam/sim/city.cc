@@ -8,6 +8,7 @@
 #include "semslam/core/error.h"
 #include "semslam/semantics/class_table.h"
 #include "semslam/sim/city_parts.h"
+#include "semslam/sim/place_names.h"
 #include "semslam/sim/random.h"
 
 namespace semslam::sim {
@@ -28,70 +29,6 @@ using city_parts::kSidewalkHeight;
 using city_parts::Look;
 
 constexpr float kGrassTop = 0.19f;  // a lawn's top, above the sidewalk
-
-// Named places of the town, drawn without repetition.
-struct PlaceName {
-  const char* name;
-  const char* category;
-};
-constexpr std::array<PlaceName, 48> kBuildingNames = {{
-    {"Town Hall", "townhall"},
-    {"St. Mary's Church", "church"},
-    {"Central Library", "library"},
-    {"City Museum", "museum"},
-    {"Main Station", "station"},
-    {"St. Anne's Hospital", "hospital"},
-    {"Market Hall", "market"},
-    {"Grand Hotel", "hotel"},
-    {"Old Theatre", "theatre"},
-    {"Post Office", "post_office"},
-    {"Fire Station", "fire_station"},
-    {"Police Headquarters", "police"},
-    {"Linden School", "school"},
-    {"Savings Bank", "bank"},
-    {"Court House", "court"},
-    {"St. Peter's Church", "church"},
-    {"Opera House", "theatre"},
-    {"Science Centre", "museum"},
-    {"Concert Hall", "theatre"},
-    {"University Library", "library"},
-    {"Clock Tower", "tower"},
-    {"Swimming Hall", "sports"},
-    {"Art Gallery", "museum"},
-    {"Chamber of Commerce", "office"},
-    {"Hotel Europa", "hotel"},
-    {"Maple Primary School", "school"},
-    {"St. Luke's Chapel", "church"},
-    {"City Archive", "library"},
-    {"Natural History Museum", "museum"},
-    {"North Station", "station"},
-    {"Children's Hospital", "hospital"},
-    {"Fish Market", "market"},
-    {"Cinema Palace", "theatre"},
-    {"Old Customs House", "office"},
-    {"Tax Office", "office"},
-    {"Guild Hall", "townhall"},
-    {"Music School", "school"},
-    {"Sports Arena", "sports"},
-    {"Observatory", "museum"},
-    {"Old Brewery", "museum"},
-    {"Trade Fair Hall", "market"},
-    {"Registry Office", "office"},
-    {"Water Tower", "tower"},
-    {"Toy Museum", "museum"},
-    {"Seamen's Church", "church"},
-    {"Palace Hotel", "hotel"},
-    {"Adult Education Centre", "school"},
-    {"Bus Depot", "station"},
-}};
-constexpr std::array<PlaceName, 6> kOpenPlaceNames = {{
-    {"Rose Park", "park"},
-    {"Market Square", "square"},
-    {"Chestnut Park", "park"},
-    {"Fountain Square", "square"},
-    {"Castle Gardens", "park"},
-    {"Linden Green", "park"},
-}};
 
 FacadeStyle RandomStyle(Rng& rng) {
   FacadeStyle s;
