@@ -4,14 +4,18 @@
 
 #include <random>
 
+#include "support/draws.h"
+
 namespace semslam {
 namespace {
+
+using testing::DrawVector3;
 
 Points3d RandomCloud(int n, unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-20.0, 20.0);
   Points3d points;
-  for (int i = 0; i < n; ++i) points.emplace_back(u(rng), u(rng), u(rng));
+  for (int i = 0; i < n; ++i) points.push_back(DrawVector3(u, rng));
   return points;
 }
 

@@ -5,8 +5,12 @@
 #include <numbers>
 #include <random>
 
+#include "support/draws.h"
+
 namespace semslam {
 namespace {
+
+using testing::DrawVector2;
 
 const Rigid3d kCamera2FromCamera1(
     Eigen::Quaterniond(Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.2, 1.0, 0.1).normalized())),
@@ -23,7 +27,8 @@ void PlanarScene(const Eigen::Vector3d& normal, double distance, int count, Poin
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> u(-0.5, 0.5);
   for (int i = 0; i < count; ++i) {
-    const Eigen::Vector3d ray(u(rng), u(rng), 1.0);
+    const Eigen::Vector2d xy = DrawVector2(u, rng);
+    const Eigen::Vector3d ray(xy.x(), xy.y(), 1.0);
     const Eigen::Vector3d point = distance / normal.dot(ray) * ray;
     x1->push_back(Normalized(point));
     x2->push_back(Normalized(kCamera2FromCamera1 * point));
@@ -102,7 +107,8 @@ TEST(Epipolar, FundamentalFromEightAndManyPoints) {
   std::uniform_real_distribution<double> u(-0.5, 0.5), depth(4.0, 30.0);
   Points2d x1, x2;
   for (int i = 0; i < 40; ++i) {
-    const Eigen::Vector3d point = depth(rng) * Eigen::Vector3d(u(rng), u(rng), 1.0);
+    const Eigen::Vector2d xy = DrawVector2(u, rng);
+    const Eigen::Vector3d point = depth(rng) * Eigen::Vector3d(xy.x(), xy.y(), 1.0);
     x1.push_back(Normalized(point));
     x2.push_back(Normalized(kCamera2FromCamera1 * point));
   }
@@ -145,7 +151,8 @@ TEST(Epipolar, RelativePoseRefinementReachesTheTruth) {
   std::uniform_real_distribution<double> u(-0.5, 0.5), depth(4.0, 30.0);
   Points2d x1, x2;
   for (int i = 0; i < 60; ++i) {
-    const Eigen::Vector3d point = depth(rng) * Eigen::Vector3d(u(rng), u(rng), 1.0);
+    const Eigen::Vector2d xy = DrawVector2(u, rng);
+    const Eigen::Vector3d point = depth(rng) * Eigen::Vector3d(xy.x(), xy.y(), 1.0);
     x1.push_back(Normalized(point));
     x2.push_back(Normalized(kCamera2FromCamera1 * point));
   }

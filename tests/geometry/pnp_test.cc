@@ -7,19 +7,23 @@
 
 #include "semslam/core/error.h"
 #include "semslam/geometry/camera.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector2;
+using testing::DrawVector3;
+
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 Rigid3d RandomPose(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  const Eigen::Vector3d axis = DrawVector3(n, rng).normalized();
   std::uniform_real_distribution<double> angle(-std::numbers::pi, std::numbers::pi);
-  return Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(angle(rng), axis)),
-                 Eigen::Vector3d(5 * n(rng), 5 * n(rng), 5 * n(rng)));
+  const Eigen::Vector3d translation = 5 * DrawVector3(n, rng);  // before the angle, as GCC drew them
+  return Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(angle(rng), axis)), translation);
 }
 
 struct Correspondences {
@@ -41,13 +45,12 @@ Correspondences MakeCorrespondences(int count, double noise_px, double outlier_r
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, noise_px);
   for (int i = 0; i < count; ++i) {
-    const Eigen::Vector2d pixel(u(rng), v(rng));
+    const Eigen::Vector2d pixel = DrawVector2(u, v, rng);
     c.world_points.push_back(world_from_camera * camera.UnprojectDepth(pixel, depth(rng)));
     const bool outlier = unit(rng) < outlier_ratio;
     c.outlier.push_back(outlier);
-    const Eigen::Vector2d observed = outlier
-                                         ? Eigen::Vector2d(u(rng), v(rng))
-                                         : Eigen::Vector2d(pixel + Eigen::Vector2d(noise(rng), noise(rng)));
+    const Eigen::Vector2d observed =
+        outlier ? DrawVector2(u, v, rng) : Eigen::Vector2d(pixel + DrawVector2(noise, rng));
     c.bearings.push_back(camera.Unproject(observed));
   }
   return c;

@@ -8,10 +8,13 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
+
+using testing::DrawVector2;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
@@ -33,14 +36,15 @@ Matches MakeMatches(const Sim3d& camera1_from_camera2, int count, double outlier
   std::normal_distribution<double> normal(0.0, 1.0);
   const auto random_point2 = [&] {
     while (true) {
-      const Eigen::Vector3d p = c.camera2.UnprojectDepth({u(rng), v(rng)}, depth(rng));
+      const double z = depth(rng);  // before the pixel, as GCC drew them (support/draws.h)
+      const Eigen::Vector3d p = c.camera2.UnprojectDepth({u(rng), v(rng)}, z);
       if (c.camera1.ProjectIfVisible(camera1_from_camera2 * p)) return p;
     }
   };
   const auto observe = [&](const PinholeCamera& camera, const Eigen::Vector3d& p, double* sigma2) {
     *sigma2 = std::pow(1.2, 2 * level(rng));
     const double sigma = std::sqrt(*sigma2);
-    return Eigen::Vector2d(camera.Project(p) + sigma * Eigen::Vector2d(normal(rng), normal(rng)));
+    return Eigen::Vector2d(camera.Project(p) + sigma * DrawVector2(normal, rng));
   };
   for (int i = 0; i < count; ++i) {
     const Eigen::Vector3d p2 = random_point2();

@@ -7,10 +7,13 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
+
+using testing::DrawVector2;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
@@ -42,15 +45,15 @@ Scene MakeScene(Structure structure, const Rigid3d& motion, int count, double no
   // Planar: a facade turned 30 degrees about the vertical, 12 m ahead.
   const Eigen::Vector3d normal(std::sin(30 * kDeg), 0.0, std::cos(30 * kDeg));
   while (static_cast<int>(scene.points.size()) < count) {
-    const Eigen::Vector2d pixel(u(rng), v(rng));
+    const Eigen::Vector2d pixel = DrawVector2(u, v, rng);
     const Eigen::Vector3d ray = scene.camera.UnprojectDepth(pixel, 1.0);
     const Eigen::Vector3d point =
         structure == Structure::kPlanar ? 12.0 / normal.dot(ray) * ray : depth(rng) * ray;
     const auto pixel2 = scene.camera.ProjectIfVisible(motion * point);
     if (!pixel2) continue;
     scene.points.push_back(point);
-    scene.pixels1.push_back(pixel + Eigen::Vector2d(noise(rng), noise(rng)));
-    scene.pixels2.push_back(*pixel2 + Eigen::Vector2d(noise(rng), noise(rng)));
+    scene.pixels1.push_back(pixel + DrawVector2(noise, rng));
+    scene.pixels2.push_back(*pixel2 + DrawVector2(noise, rng));
   }
   scene.outlier.assign(static_cast<size_t>(count), false);
   std::vector<size_t> order(static_cast<size_t>(count));
@@ -59,7 +62,7 @@ Scene MakeScene(Structure structure, const Rigid3d& motion, int count, double no
   const auto num_outliers = static_cast<size_t>(std::lround(outlier_ratio * count));
   for (size_t k = 0; k < num_outliers; ++k) {
     scene.outlier[order[k]] = true;
-    scene.pixels2[order[k]] = Eigen::Vector2d(u(rng), v(rng));
+    scene.pixels2[order[k]] = DrawVector2(u, v, rng);
   }
   return scene;
 }
@@ -136,10 +139,10 @@ TEST(TwoView, DistortedCamera) {
   std::normal_distribution<double> noise(0.0, 0.5);
   std::mt19937 rng(8);
   for (size_t i = 0; i < scene.points.size(); ++i) {
-    scene.pixels1[i] = scene.camera.Project(scene.points[i]) + Eigen::Vector2d(noise(rng), noise(rng));
+    scene.pixels1[i] = scene.camera.Project(scene.points[i]) + DrawVector2(noise, rng);
     if (!scene.outlier[i]) {
-      scene.pixels2[i] = scene.camera.Project(scene.camera2_from_camera1 * scene.points[i]) +
-                         Eigen::Vector2d(noise(rng), noise(rng));
+      scene.pixels2[i] =
+          scene.camera.Project(scene.camera2_from_camera1 * scene.points[i]) + DrawVector2(noise, rng);
     }
   }
   const TwoViewResult result =
@@ -175,13 +178,13 @@ TEST(TwoView, OneCloseObjectDoesNotPassTheParallaxTestAlone) {
                        int count) {
     std::uniform_real_distribution<double> u(u_min, u_max), v(v_min, v_max), depth(d_min, d_max);
     for (int added = 0; added < count;) {
-      const Eigen::Vector2d pixel(u(rng), v(rng));
+      const Eigen::Vector2d pixel = DrawVector2(u, v, rng);
       const Eigen::Vector3d point = depth(rng) * scene.camera.UnprojectDepth(pixel, 1.0);
       const auto pixel2 = scene.camera.ProjectIfVisible(scene.camera2_from_camera1 * point);
       if (!pixel2) continue;
       scene.points.push_back(point);
-      scene.pixels1.push_back(pixel + Eigen::Vector2d(noise(rng), noise(rng)));
-      scene.pixels2.push_back(*pixel2 + Eigen::Vector2d(noise(rng), noise(rng)));
+      scene.pixels1.push_back(pixel + DrawVector2(noise, rng));
+      scene.pixels2.push_back(*pixel2 + DrawVector2(noise, rng));
       ++added;
     }
   };

@@ -13,10 +13,13 @@
 
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
+
+using testing::DrawVector3;
 
 TEST(GlobalBundleAdjustmentWindows, CoverTheKeyframesInTheFewestNearEqualWindows) {
   using Ranges = std::vector<std::pair<size_t, size_t>>;
@@ -45,7 +48,7 @@ class DisturbedStreet : public ::testing::Test {
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> along(0.0, kSpacing * kKeyframes + 14.0), across(-8.0, 8.0),
         height(-2.0, 3.0);
-    for (int i = 0; i < 900; ++i) truth_points_.emplace_back(across(rng), height(rng), along(rng));
+    for (int i = 0; i < 900; ++i) truth_points_.push_back(DrawVector3(across, height, along, rng));
     auto lock = map_.WriteLock();
     std::vector<std::vector<int>> seen(kKeyframes);
     for (int k = 0; k < kKeyframes; ++k) {
@@ -93,13 +96,12 @@ class DisturbedStreet : public ::testing::Test {
     std::mt19937_64 rng(7);
     std::normal_distribution<double> pose_noise(0.0, pose_sigma), point_noise(0.0, point_sigma);
     for (int k = 1; k < kKeyframes; ++k) {
-      const Eigen::Vector3d shift(pose_noise(rng), pose_noise(rng), pose_noise(rng));
+      const Eigen::Vector3d shift = DrawVector3(pose_noise, rng);
       keyframes_[static_cast<size_t>(k)]->SetPose(
           Rigid3d(Eigen::Quaterniond::Identity(), -(Center(k) + shift)));
     }
     for (MapPoint* p : points_) {
-      if (p != nullptr)
-        p->SetPosition(p->position() + Eigen::Vector3d(point_noise(rng), point_noise(rng), point_noise(rng)));
+      if (p != nullptr) p->SetPosition(p->position() + DrawVector3(point_noise, rng));
     }
   }
 

@@ -13,10 +13,14 @@
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
 #include "semslam/mapping/map_optimization.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
+
+using testing::DrawVector2;
+using testing::DrawVector3;
 
 class MonocularDrive : public ::testing::Test {
  protected:
@@ -54,7 +58,7 @@ class MonocularDrive : public ::testing::Test {
     std::uniform_real_distribution<double> across(-45.0, 45.0), height(-8.0, 4.0), along(12.0, 80.0);
     std::normal_distribution<double> noise(0.0, kNoisePx);
     std::vector<Eigen::Vector3d> truth_points;
-    for (int i = 0; i < 1200; ++i) truth_points.emplace_back(across(rng), height(rng), along(rng));
+    for (int i = 0; i < 1200; ++i) truth_points.push_back(DrawVector3(across, height, along, rng));
     auto lock = map_->WriteLock();
     std::vector<std::vector<int>> seen(kKeyframes);
     for (int k = 0; k < kKeyframes; ++k) {
@@ -66,7 +70,7 @@ class MonocularDrive : public ::testing::Test {
       for (size_t j = 0; j < truth_points.size(); ++j) {
         const Eigen::Vector3d c = camera_from_world * truth_points[j];
         if (c.z() < 2.0) continue;
-        const Eigen::Vector2d pixel = truth.Project(c) + Eigen::Vector2d(noise(rng), noise(rng));
+        const Eigen::Vector2d pixel = truth.Project(c) + DrawVector2(noise, rng);
         if (!nominal.InImage(pixel, 2.0)) continue;
         Keypoint kp;
         kp.pixel = pixel.cast<float>();

@@ -15,10 +15,13 @@
 
 #include "semslam/core/error.h"
 #include "semslam/map/map.h"
+#include "support/draws.h"
 #include "support/kitti_camera.h"
 
 namespace semslam {
 namespace {
+
+using testing::DrawVector2;
 
 // Two keyframes `baseline` metres apart sideways, each of its own map: keyframe 2's map is kMap2Scale times
 // the world. Both see the same 300 points 10-40 m ahead; keypoints carry `pixel_noise` pixels of noise and
@@ -40,7 +43,8 @@ class TwoMonocularKeyframes : public ::testing::Test {
     std::vector<Eigen::Vector3d> world;
     while (world.size() < 300) {
       const double depth = 10.0 + 30.0 * unit(rng);
-      const Eigen::Vector3d p((unit(rng) - 0.5) * depth * 1.4, (unit(rng) - 0.6) * depth * 0.4, depth);
+      const Eigen::Vector2d xy = DrawVector2(unit, rng);
+      const Eigen::Vector3d p((xy.x() - 0.5) * depth * 1.4, (xy.y() - 0.6) * depth * 0.4, depth);
       if (camera.InImage(camera.Project(p - center1)) && camera.InImage(camera.Project(p - center2)))
         world.push_back(p);
     }
@@ -71,8 +75,9 @@ class TwoMonocularKeyframes : public ::testing::Test {
     for (const Eigen::Vector3d& p : world) {
       const Eigen::Vector2d pixel = camera.Project(p - center);
       Keypoint kp;
-      kp.pixel = Eigen::Vector2f(static_cast<float>(pixel.x() + gauss(rng)),
-                                 static_cast<float>(pixel.y() + gauss(rng)));
+      const Eigen::Vector2d noise = DrawVector2(gauss, rng);
+      kp.pixel = Eigen::Vector2f(static_cast<float>(pixel.x() + noise.x()),
+                                 static_cast<float>(pixel.y() + noise.y()));
       features.keypoints.push_back(kp);
       features.descriptors.push_back({});
     }

@@ -9,11 +9,13 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "support/test_support.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector2;
 using testing::TempDir;
 
 constexpr int kCar = TrainId(SemanticClass::kCar);
@@ -75,7 +77,8 @@ Scene MakeScene(double map_units_per_metre) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-100.0, 100.0);
   while (s.noise.size() < 200) {
-    const Eigen::Vector3d p(u(rng), u(rng), 0.5);
+    const Eigen::Vector2d xy = DrawVector2(u, rng);
+    const Eigen::Vector3d p(xy.x(), xy.y(), 0.5);
     bool isolated = true;  // farther than 2 m from every object point and every other noise point
     for (const LabeledPoint& q : s.points) isolated = isolated && (q.position - p).norm() > 2.0;
     if (!isolated) continue;

@@ -7,11 +7,14 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "synthetic.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector2;
+using testing::DrawVector3;
 using testing_optim::Perturbation;
 using testing_optim::RandomVector;
 using testing_optim::RotationError;
@@ -40,7 +43,7 @@ Scene MakeScene(int num_poses, int num_points, int num_fixed, bool stereo, doubl
   std::uniform_real_distribution<double> x(-20, 20), y(-4, 2), z(8, 60), unit(0, 1), angle(0, 2 * M_PI);
   std::normal_distribution<double> noise(0, 1);
   while (static_cast<int>(s.true_points.size()) < num_points) {
-    const Eigen::Vector3d p(x(rng), y(rng), z(rng));
+    const Eigen::Vector3d p = DrawVector3(x, y, z, rng);
     std::vector<BundleAdjustmentObservation> seen;
     for (int i = 0; i < num_poses; ++i) {
       const Eigen::Vector3d pc = s.true_poses[static_cast<size_t>(i)] * p;
@@ -48,7 +51,7 @@ Scene MakeScene(int num_poses, int num_points, int num_fixed, bool stereo, doubl
       BundleAdjustmentObservation o;
       o.pose = i;
       o.point = static_cast<int>(s.true_points.size());
-      o.pixel = s.problem.camera.Project(pc) + pixel_noise * Eigen::Vector2d(noise(rng), noise(rng));
+      o.pixel = s.problem.camera.Project(pc) + pixel_noise * DrawVector2(noise, rng);
       if (stereo) {
         o.right_u = s.problem.camera.Project(pc).x() - s.problem.camera.fx * s.problem.baseline / pc.z() +
                     pixel_noise * noise(rng);
@@ -305,7 +308,7 @@ TEST(BundleAdjust, APosePriorPlacesAPoseTheObservationsLeaveFree) {
   std::uniform_real_distribution<double> x(-8, 8), y(-2, 2), z(6, 30);
   for (int pose = 0; pose < 2; ++pose) {
     for (int k = 0; k < 30; ++k) {
-      const Eigen::Vector3d in_camera(x(rng), y(rng), z(rng));
+      const Eigen::Vector3d in_camera = DrawVector3(x, y, z, rng);
       BundleAdjustmentObservation o;
       o.pose = pose;
       o.point = static_cast<int>(p.points.size());

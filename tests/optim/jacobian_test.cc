@@ -17,6 +17,7 @@ namespace {
 
 using optim_internal::kRigidSize;
 using optim_internal::kSim3Size;
+using testing_optim::RandomRigid;
 using testing_optim::RandomVector;
 
 // Evaluates `cost` at `params`; returns residuals and, when asked, the ambient Jacobians.
@@ -94,12 +95,13 @@ std::vector<double> Packed(const Sim3d& s) {
 
 Sim3d RandomSim3(std::mt19937& rng, double log_scale_sigma) {
   std::normal_distribution<double> n(0.0, log_scale_sigma);
-  return Sim3d(std::exp(n(rng)), QuaternionExp(RandomVector(rng, 0.8)), RandomVector(rng, 5.0));
+  const Rigid3d motion = RandomRigid(rng, 0.8, 5.0);
+  return Sim3d(std::exp(n(rng)), motion.rotation, motion.translation);
 }
 
 // A random camera pose and a world point 3-30 m in front of it.
 std::pair<Rigid3d, Eigen::Vector3d> RandomPoseAndPoint(std::mt19937& rng, const PinholeCamera& camera) {
-  const Rigid3d camera_from_world(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
+  const Rigid3d camera_from_world = RandomRigid(rng, 0.5, 2.0);
   return {camera_from_world,
           camera_from_world.Inverse() * testing_optim::RandomCameraPoint(rng, camera, 3, 30)};
 }
@@ -123,10 +125,9 @@ TEST(OptimJacobians, PosePrior) {
   std::mt19937 rng(4);
   const optim_internal::RigidLeftManifold manifold;
   for (int trial = 0; trial < 5; ++trial) {
-    const Rigid3d a(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
-    const Rigid3d b(QuaternionExp(RandomVector(rng, 0.5)), RandomVector(rng, 2.0));
-    const Rigid3d measured =
-        Rigid3d(QuaternionExp(RandomVector(rng, 0.1)), RandomVector(rng, 0.3)) * a * b.Inverse();
+    const Rigid3d a = RandomRigid(rng, 0.5, 2.0);
+    const Rigid3d b = RandomRigid(rng, 0.5, 2.0);
+    const Rigid3d measured = RandomRigid(rng, 0.1, 0.3) * a * b.Inverse();
     std::unique_ptr<ceres::CostFunction> cost(optim_internal::NewPosePriorCost(measured, 0.2, 0.05));
     ExpectJacobiansMatch(*cost, {Packed(a), Packed(b)}, {&manifold, &manifold});
   }
@@ -190,8 +191,10 @@ TEST(OptimJacobians, PositionPriors) {
     ExpectJacobiansMatch(*offset, {Packed(node)}, {&manifold});
     std::unique_ptr<ceres::CostFunction> framed(optim_internal::NewPositionPriorCost(target, 1.5, true));
     ExpectJacobiansMatch(*framed, {Packed(node), Packed(frame)}, {&manifold, &manifold});
-    std::unique_ptr<ceres::CostFunction> direction(optim_internal::NewDirectionPriorCost(
-        RandomVector(rng, 1.0).normalized(), RandomVector(rng, 1.0).normalized(), 0.05));
+    const Eigen::Vector3d target_direction = RandomVector(rng, 1.0).normalized();  // GCC's order (draws.h)
+    const Eigen::Vector3d axis = RandomVector(rng, 1.0).normalized();
+    std::unique_ptr<ceres::CostFunction> direction(
+        optim_internal::NewDirectionPriorCost(axis, target_direction, 0.05));
     ExpectJacobiansMatch(*direction, {Packed(node)}, {&manifold});
   }
 }
@@ -201,8 +204,8 @@ TEST(OptimJacobians, Sim3Reprojection) {
   const PinholeCamera camera = KittiCamera();
   const optim_internal::Sim3RightManifold manifold(false);
   for (int trial = 0; trial < 5; ++trial) {
-    const Sim3d c1_from_c2(std::exp(0.2 * trial - 0.4), QuaternionExp(RandomVector(rng, 0.1)),
-                           RandomVector(rng, 0.5));
+    const Rigid3d motion = RandomRigid(rng, 0.1, 0.5);
+    const Sim3d c1_from_c2(std::exp(0.2 * trial - 0.4), motion.rotation, motion.translation);
     const Eigen::Vector3d p2 = testing_optim::RandomCameraPoint(rng, camera, 5, 20);
     const Eigen::Vector3d p1 = c1_from_c2 * p2;
     std::unique_ptr<ceres::CostFunction> into1(
@@ -233,8 +236,7 @@ TEST(OptimManifolds, PlusMinusRoundTrip) {
   const optim_internal::RigidLeftManifold rigid;
   const optim_internal::Sim3RightManifold sim3(false);
   for (int trial = 0; trial < 10; ++trial) {
-    const std::vector<double> x =
-        Packed(Rigid3d(QuaternionExp(RandomVector(rng, 1.0)), RandomVector(rng, 3.0)));
+    const std::vector<double> x = Packed(RandomRigid(rng, 1.0, 3.0));
     Eigen::Vector6d delta;
     delta.head<3>() = RandomVector(rng, 0.5);
     delta.tail<3>() = RandomVector(rng, 0.3);

@@ -6,11 +6,14 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "synthetic.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector3;
+using testing_optim::RandomRigid;
 using testing_optim::RandomVector;
 using testing_optim::RotationError;
 
@@ -45,8 +48,9 @@ DriftingChain MakeDriftingChain(int n, double drift, double noise, std::uint32_t
   c.initial.push_back(Sim3d(c.truth[0]));
   for (int i = 0; i + 1 < n; ++i) {
     const Rigid3d rel = c.truth[static_cast<size_t>(i)].Inverse() * c.truth[static_cast<size_t>(i) + 1];
-    const Sim3d measured(1.0, QuaternionExp(RandomVector(rng, noise)) * rel.rotation,
-                         c.local_scale[static_cast<size_t>(i)] * rel.translation + RandomVector(rng, noise));
+    const Rigid3d error = RandomRigid(rng, noise, noise);
+    const Sim3d measured(1.0, error.rotation * rel.rotation,
+                         c.local_scale[static_cast<size_t>(i)] * rel.translation + error.translation);
     c.odometry.push_back(measured);
     c.initial.push_back(c.initial.back() * measured);
   }
@@ -87,9 +91,11 @@ TEST(PoseGraph, ConsistentEdgesGiveTheExactPoses) {
     nodes.emplace_back(std::exp(0.1 * std::sin(0.3 * i)), truth[i].rotation, truth[i].translation);
   PoseGraph g;
   for (size_t i = 0; i < nodes.size(); ++i) {
-    const Sim3d perturbed = i == 0 ? nodes[i]
-                                   : nodes[i] * Sim3d(std::exp(0.05), QuaternionExp(RandomVector(rng, 0.05)),
-                                                      RandomVector(rng, 0.5));
+    Sim3d perturbed = nodes[i];
+    if (i > 0) {
+      const Rigid3d error = RandomRigid(rng, 0.05, 0.5);
+      perturbed = nodes[i] * Sim3d(std::exp(0.05), error.rotation, error.translation);
+    }
     g.AddNode(perturbed, i == 0);
   }
   for (size_t i = 0; i < nodes.size(); ++i) {
@@ -146,8 +152,7 @@ TEST(PoseGraph, RobustPositionPriorsCorrectDriftAndRejectOutliers) {
   // A fix (sigma 0.5 m) on every keyframe after the first; 5 of the 99 are 50 m off.
   std::vector<bool> bad;
   for (int i = 1; i < n; ++i) {
-    Eigen::Vector3d target = c.truth[static_cast<size_t>(i)].translation +
-                             Eigen::Vector3d(gps_noise(rng), gps_noise(rng), gps_noise(rng));
+    Eigen::Vector3d target = c.truth[static_cast<size_t>(i)].translation + DrawVector3(gps_noise, rng);
     const bool outlier = i % 20 == 7;
     if (outlier) target += 50.0 * RandomVector(rng, 1.0).normalized();
     g.AddPositionPrior(i, target, 0.5, true);
@@ -200,8 +205,7 @@ TEST(PoseGraph, LoopEdgeAndSparsePriorsTogether) {
   g.AddRelativeEdge(n - 1, 0, TrueRelative(c, n - 1, 0), OdometryInformation());
   // A fix (sigma 1 m) every 10 keyframes, one of them 50 m off.
   for (int i = 5; i < n; i += 10) {
-    Eigen::Vector3d target = c.truth[static_cast<size_t>(i)].translation +
-                             Eigen::Vector3d(gps_noise(rng), gps_noise(rng), gps_noise(rng));
+    Eigen::Vector3d target = c.truth[static_cast<size_t>(i)].translation + DrawVector3(gps_noise, rng);
     if (i == 55) target += Eigen::Vector3d(50, 0, 0);
     g.AddPositionPrior(i, target, 1.0);
   }
@@ -228,10 +232,7 @@ TEST(PoseGraph, EstimatesThePriorFrameJointly) {
   for (int i = 0; i < n; ++i)
     enu_truth.push_back(enu_from_world * c.truth[static_cast<size_t>(i)].translation);
   for (int i = 0; i < n; i += 3) {
-    g.AddPositionPrior(
-        i,
-        enu_truth[static_cast<size_t>(i)] + Eigen::Vector3d(gps_noise(rng), gps_noise(rng), gps_noise(rng)),
-        0.3);
+    g.AddPositionPrior(i, enu_truth[static_cast<size_t>(i)] + DrawVector3(gps_noise, rng), 0.3);
   }
   // Initial guess of a rough closed-form alignment: 10 % off in scale, 0.1 rad, 15 m.
   const Sim3d guess =
@@ -270,8 +271,8 @@ TEST(PoseGraph, FixedScaleKeepsScaleOne) {
   g.AddNode(initial[0], true);
   for (int i = 0; i + 1 < n; ++i) {
     const Rigid3d rel = truth[static_cast<size_t>(i)].Inverse() * truth[static_cast<size_t>(i) + 1];
-    const Sim3d measured(1.0, QuaternionExp(RandomVector(rng, 0.004)) * rel.rotation,
-                         rel.translation + RandomVector(rng, 0.02));
+    const Rigid3d error = RandomRigid(rng, 0.004, 0.02);
+    const Sim3d measured(1.0, error.rotation * rel.rotation, rel.translation + error.translation);
     initial.push_back(initial.back() * measured);
     g.AddNode(initial.back(), false);
     g.AddRelativeEdge(i, i + 1, measured);

@@ -6,11 +6,13 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "synthetic.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector2;
 using testing_optim::Perturbation;
 using testing_optim::RotationError;
 
@@ -41,7 +43,7 @@ Scene MakeScene(int n, bool stereo, double outlier_fraction, double pixel_noise,
     PoseObservation o;
     o.point = world_from_camera * pc;
     o.inv_sigma2 = 1.0 / (sigma * sigma);
-    o.pixel = s.problem.camera.Project(pc) + pixel_noise * sigma * Eigen::Vector2d(noise(rng), noise(rng));
+    o.pixel = s.problem.camera.Project(pc) + pixel_noise * sigma * DrawVector2(noise, rng);
     if (stereo) o.right_u = s.problem.camera.Project(pc).x() - bf / pc.z() + pixel_noise * sigma * noise(rng);
     const bool bad = unit(rng) < outlier_fraction;
     if (bad) {

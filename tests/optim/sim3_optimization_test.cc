@@ -6,11 +6,13 @@
 #include <random>
 
 #include "semslam/core/error.h"
+#include "support/draws.h"
 #include "synthetic.h"
 
 namespace semslam {
 namespace {
 
+using testing::DrawVector2;
 using testing_optim::RandomVector;
 using testing_optim::RotationError;
 
@@ -39,8 +41,8 @@ Scene MakeScene(int n, double scale, double outlier_fraction, double pixel_noise
     Sim3Match m;
     m.point1 = p1;
     m.point2 = p2;
-    m.pixel1 = s.problem.camera1.Project(p1) + pixel_noise * sigma1 * Eigen::Vector2d(noise(rng), noise(rng));
-    m.pixel2 = s.problem.camera2.Project(p2) + pixel_noise * sigma2 * Eigen::Vector2d(noise(rng), noise(rng));
+    m.pixel1 = s.problem.camera1.Project(p1) + pixel_noise * sigma1 * DrawVector2(noise, rng);
+    m.pixel2 = s.problem.camera2.Project(p2) + pixel_noise * sigma2 * DrawVector2(noise, rng);
     m.inv_sigma2_1 = 1.0 / (sigma1 * sigma1);
     m.inv_sigma2_2 = 1.0 / (sigma2 * sigma2);
     const bool bad = unit(rng) < outlier_fraction;

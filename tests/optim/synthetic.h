@@ -21,13 +21,23 @@ inline Eigen::Vector3d RandomCameraPoint(std::mt19937& rng, const PinholeCamera&
                                          double max_depth) {
   std::uniform_real_distribution<double> u(5.0, c.width - 6.0), v(5.0, c.height - 6.0),
       z(min_depth, max_depth);
-  return c.UnprojectDepth({u(rng), v(rng)}, z(rng));
+  // One statement a draw, in the order GCC evaluated the arguments of UnprojectDepth (support/draws.h).
+  const double depth = z(rng);
+  const Eigen::Vector2d pixel{u(rng), v(rng)};
+  return c.UnprojectDepth(pixel, depth);
+}
+
+// A random rigid motion: rotation vector and translation of independent normal coordinates with standard
+// deviations `rotation_sigma` (rad) and `translation_sigma` (m). The translation is drawn first (GCC's order
+// for the two arguments of Rigid3d, which the tests' bounds were measured with; support/draws.h).
+inline Rigid3d RandomRigid(std::mt19937& rng, double rotation_sigma, double translation_sigma) {
+  const Eigen::Vector3d translation = RandomVector(rng, translation_sigma);
+  return Rigid3d(QuaternionExp(RandomVector(rng, rotation_sigma)), translation);
 }
 
 // Small random rigid motion: rotation of about `angle` rad, translation of about `distance` m.
 inline Rigid3d Perturbation(std::mt19937& rng, double angle, double distance) {
-  return Rigid3d(QuaternionExp(RandomVector(rng, angle / std::sqrt(3.0))),
-                 RandomVector(rng, distance / std::sqrt(3.0)));
+  return RandomRigid(rng, angle / std::sqrt(3.0), distance / std::sqrt(3.0));
 }
 
 inline double RotationError(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {

@@ -14,7 +14,10 @@ BowVector RandomBow(std::mt19937& rng, int words, int vocabulary) {
   std::uniform_int_distribution<int> word(0, vocabulary - 1);
   std::uniform_real_distribution<double> weight(0.1, 1.0);
   std::vector<BowVector::Entry> e;
-  for (int i = 0; i < words; ++i) e.emplace_back(static_cast<WordId>(word(rng)), weight(rng));
+  for (int i = 0; i < words; ++i) {
+    const double w = weight(rng);  // before the word, as GCC drew them (support/draws.h)
+    e.emplace_back(static_cast<WordId>(word(rng)), w);
+  }
   BowVector v(std::move(e));
   v.NormalizeL1();
   return v;
