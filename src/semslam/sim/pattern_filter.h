@@ -107,6 +107,7 @@ inline float ValueNoise2(float x, float y, std::uint32_t seed) {
   return pattern::Mix(pattern::Mix(v00, v10, tx), pattern::Mix(v01, v11, tx), ty);
 }
 
+// The same on a 3D lattice.
 inline float ValueNoise3(float x, float y, float z, std::uint32_t seed) {
   const pattern::NoiseTable& nt = pattern::Table();
   const float fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
@@ -148,6 +149,7 @@ inline float FilteredNoise2(float x, float y, std::uint32_t seed, float frequenc
   return sum / norm * 1.6f;
 }
 
+// The same with ValueNoise3.
 inline float FilteredNoise3(const Eigen::Vector3f& p, std::uint32_t seed, float frequency, int octaves,
                             float footprint) {
   float sum = 0, norm = 0, amplitude = 1, f = frequency;
