@@ -4,8 +4,8 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cctype>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -21,17 +21,16 @@
 #include "semslam/geo/gps.h"
 #include "semslam/geo/gps_fusion.h"
 #include "semslam/io/sequence.h"
-#include "semslam/io/trajectory_io.h"
 #include "semslam/landmarks/catalogue.h"
 #include "semslam/loop/loop_closer.h"
 #include "semslam/map/map_file.h"
 #include "semslam/map/map_validation.h"
 #include "semslam/mapping/map_georeference.h"
-#include "semslam/report/geo_evaluation.h"
 #include "semslam/report/geo_outputs.h"
 #include "semslam/report/html_report.h"
 #include "semslam/system/atlas_outputs.h"
 #include "semslam/system/merge_inputs.h"
+#include "semslam/system/merge_outputs.h"
 #include "semslam/system/merge_places.h"
 #include "semslam/system/merge_session_frames.h"
 #include "semslam/system/run_output_dir.h"
@@ -139,30 +138,10 @@ nlohmann::json FuseSessionsWithGps(SlamSystem& slam, std::uint32_t main_map,
           {"fit_rmse_m", result->inlier_rmse_m}};
 }
 
-std::string SessionFolderName(const MapSession& s) {
-  std::string name = s.name.empty() ? std::string("session") : s.name;
-  for (char& c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
-  }
-  return fmt::format("{:03d}-{}", s.id, name);
-}
-
-Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_id,
-                        double time_offset = 0.0) {
-  Trajectory t;
-  for (const FramePose& f : frames) {
-    if (f.map_id == map_id && !f.predicted) t.push_back({f.timestamp + time_offset, f.world_from_camera});
-  }
-  return t;
-}
-
-}  // namespace
-
-SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
-  options.Check();
-  Stopwatch watch;
+// The runs to merge: one sensor mode for all.
+std::vector<InputRun> ReadRuns(const std::vector<fs::path>& dirs) {
   std::vector<InputRun> runs;
-  for (const fs::path& dir : options.runs) runs.push_back(ReadInputRun(dir));
+  for (const fs::path& dir : dirs) runs.push_back(ReadInputRun(dir));
   for (const InputRun& r : runs) {
     if (r.mode != runs.front().mode) {
       throw InvalidArgument(
@@ -171,20 +150,17 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
                       runs.front().dir.string(), runs.front().mode, r.dir.string(), r.mode));
     }
   }
-  const bool stereo = runs.front().mode == "stereo";
-  const FrameScale frame_scale = stereo ? FrameScale::kKeyFrame : FrameScale::kNeighbourSpacing;
-  OutputDirOptions output_dir_options;
-  output_dir_options.overwrite = options.overwrite;
-  output_dir_options.command = "merge";
-  const RunOutputDir output_dir(options.output, output_dir_options);
-  const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
+  return runs;
+}
 
-  // The system that holds the atlas: its camera and rig are the first map's (it tracks no frame).
+// The system that holds the atlas: its camera and rig are the first map's (it tracks no frame).
+std::unique_ptr<SlamSystem> MakeAtlasSystem(const InputRun& first_run, bool stereo,
+                                            const SessionMergeOptions& options) {
   PinholeCamera camera;
   std::optional<StereoRig> rig;
   {
     Map first;
-    const MapFileContents contents = ReadMapFile(runs.front().dir / "map.semslam", first);
+    const MapFileContents contents = ReadMapFile(first_run.dir / "map.semslam", first);
     auto lock = first.ReadLock();
     const KeyFrame* kf = first.KeyFrames().front();
     camera = contents.cameras.begin()->second.camera;
@@ -201,14 +177,21 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   slam_options.final_global_ba_refine_iterations = options.global_ba_refine_iterations;
   slam_options.final_refine_intrinsics = false;  // each map keeps the camera its run fitted
   if (stereo && !rig)
-    throw InputError(runs.front().dir / "map.semslam", "a stereo run's map holds no stereo keyframe");
-  SlamSystem slam(slam_options, camera, stereo ? rig : std::nullopt);
-  Map& map = slam.map();
+    throw InputError(first_run.dir / "map.semslam", "a stereo run's map holds no stereo keyframe");
+  return std::make_unique<SlamSystem>(slam_options, camera, stereo ? rig : std::nullopt);
+}
 
-  // 1. The atlas, and where each session's frames are.
+// The runs' maps in one atlas, and where each session's frames are.
+struct Atlas {
   std::vector<SessionRecord> sessions;
   std::map<std::uint32_t, Georeference> in_world;  // by map id, as each run placed it
-  std::vector<fs::path> catalogues;
+  std::vector<fs::path> catalogues;                // the runs' landmark catalogues
+};
+
+Atlas AppendRuns(SlamSystem& slam, const std::vector<InputRun>& runs) {
+  Map& map = slam.map();
+  Atlas atlas;
+  std::vector<SessionRecord>& sessions = atlas.sessions;
   for (const InputRun& run : runs) {
     const MapFileContents contents = slam.AppendMap(run.dir / "map.semslam");
     auto lock = map.ReadLock();
@@ -241,29 +224,101 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
       const GeoContext geo = ParseGeoSection(
           it->second, fs::path((run.dir / "map.semslam").string() + "#geo"), largest - contents.first_map_id);
       for (const auto& [id, georeference] : geo.maps)
-        in_world.emplace(id + contents.first_map_id, georeference);
+        atlas.in_world.emplace(id + contents.first_map_id, georeference);
     }
-    catalogues.insert(catalogues.end(), run.catalogues.begin(), run.catalogues.end());
+    atlas.catalogues.insert(atlas.catalogues.end(), run.catalogues.begin(), run.catalogues.end());
   }
   for (const SessionRecord& s : sessions) {
     if (!s.input)
       spdlog::info("session {} ({}): no frames of its own are known, only its keyframes", s.id,
                    map.sessions()[s.id].name);
   }
+  return atlas;
+}
 
-  // 2. One world frame for every map a run placed in it.
-  std::optional<EnuFrame> world;
-  std::set<std::uint32_t> world_maps;
+// One world frame for every map a run placed in it: its ENU origin is the first such run's.
+struct World {
+  std::optional<EnuFrame> frame;
+  std::set<std::uint32_t> maps;  // the maps in it
+};
+
+World MoveMapsIntoOneWorld(Map& map, const std::map<std::uint32_t, Georeference>& in_world) {
+  World world;
   for (const auto& [map_id, georeference] : in_world) {
-    if (!world) world = georeference.enu_frame;
-    const Sim3d world_from_map = EnuFromEnu(*world, georeference.enu_frame) * georeference.enu_from_map;
+    if (!world.frame) world.frame = georeference.enu_frame;
+    const Sim3d world_from_map = EnuFromEnu(*world.frame, georeference.enu_frame) * georeference.enu_from_map;
     auto lock = map.WriteLock();
     if (map.NumKeyFramesOfMap(map_id) == 0) continue;
     MoveMapIntoWorld(map, map_id, {}, world_from_map);
-    world_maps.insert(map_id);
+    world.maps.insert(map_id);
     spdlog::info("map {} is in the world (its run's GPS placement){}", map_id,
                  georeference.local ? "; its per-keyframe corrections are left out" : "");
   }
+  return world;
+}
+
+// Maps in the world that no place tied, joined by their GPS placement into the largest of them.
+struct GpsJoins {
+  std::optional<std::uint32_t> main_map;  // the map in the world
+  size_t count = 0;
+  nlohmann::json events = nlohmann::json::array();
+};
+
+GpsJoins JoinMapsInTheWorld(Map& map, const std::set<std::uint32_t>& world_maps) {
+  GpsJoins joins;
+  auto lock = map.WriteLock();
+  for (const std::uint32_t id : map.MapIds()) {
+    if (!world_maps.count(id)) continue;
+    if (!joins.main_map || map.NumKeyFramesOfMap(id) > map.NumKeyFramesOfMap(*joins.main_map))
+      joins.main_map = id;
+  }
+  for (const std::uint32_t id : map.MapIds()) {
+    if (!world_maps.count(id) || id == *joins.main_map) continue;
+    map.MergeMapInto(id, *joins.main_map);
+    ++joins.count;
+    joins.events.push_back({{"map", id}, {"into", *joins.main_map}});
+    spdlog::info("map {} joined map {} in the world through the GPS", id, *joins.main_map);
+  }
+  return joins;
+}
+
+// A point that no adjustment held (seen from nearly one direction) may have run off towards infinity: not a
+// place of the map, and one the map file refuses.
+void RemoveRunawayPoints(Map& map) {
+  auto lock = map.WriteLock();
+  size_t culled = 0;
+  for (MapPoint* p : map.MapPoints()) {
+    if (p->position().allFinite() && p->position().cwiseAbs().maxCoeff() <= kMaxMapCoordinateM / 10) continue;
+    p->SetBad();
+    map.EraseMapPoint(p);
+    ++culled;
+  }
+  if (culled > 0) spdlog::info("{} map points far beyond the map removed", culled);
+}
+
+}  // namespace
+
+SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
+  options.Check();
+  Stopwatch watch;
+  const std::vector<InputRun> runs = ReadRuns(options.runs);
+  const bool stereo = runs.front().mode == "stereo";
+  const FrameScale frame_scale = stereo ? FrameScale::kKeyFrame : FrameScale::kNeighbourSpacing;
+  OutputDirOptions output_dir_options;
+  output_dir_options.overwrite = options.overwrite;
+  output_dir_options.command = "merge";
+  const RunOutputDir output_dir(options.output, output_dir_options);
+  const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
+  const std::unique_ptr<SlamSystem> system = MakeAtlasSystem(runs.front(), stereo, options);
+  SlamSystem& slam = *system;
+  Map& map = slam.map();
+
+  // 1. The atlas, and where each session's frames are.
+  Atlas atlas = AppendRuns(slam, runs);
+  std::vector<SessionRecord>& sessions = atlas.sessions;
+
+  // 2. One world frame for every map a run placed in it.
+  World world = MoveMapsIntoOneWorld(map, atlas.in_world);
 
   // 3. Place recognition across maps, then between the drives of each merged map.
   std::string status = "ok";
@@ -272,7 +327,7 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
     PlaceRecognitionOptions place_options;
     place_options.loops_between_drives = options.loops_between_drives;
     place_options.show_progress = options.show_progress;
-    places = RecognizePlacesAcrossDrives(slam, world_maps, place_options);
+    places = RecognizePlacesAcrossDrives(slam, world.maps, place_options);
     if (places.interrupted) status = "interrupted";
   }
 
@@ -280,222 +335,35 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   slam.Finish();
 
   // 5. Maps in the world that no place tied: joined by their GPS placement.
-  size_t gps_joins = 0;
-  nlohmann::json joins = nlohmann::json::array();
-  std::optional<std::uint32_t> world_main;
-  {
-    auto lock = map.WriteLock();
-    for (const std::uint32_t id : map.MapIds()) {
-      if (!world_maps.count(id)) continue;
-      if (!world_main || map.NumKeyFramesOfMap(id) > map.NumKeyFramesOfMap(*world_main)) world_main = id;
-    }
-    for (const std::uint32_t id : map.MapIds()) {
-      if (!world_maps.count(id) || id == *world_main) continue;
-      map.MergeMapInto(id, *world_main);
-      ++gps_joins;
-      joins.push_back({{"map", id}, {"into", *world_main}});
-      spdlog::info("map {} joined map {} in the world through the GPS", id, *world_main);
-    }
-  }
+  const GpsJoins joins = JoinMapsInTheWorld(map, world.maps);
+  const std::optional<std::uint32_t>& world_main = joins.main_map;
 
   // 6. The merged map in the world: placed by every drive's GPS.
   nlohmann::json gps_fusion = nullptr;
   if (world_main && options.gps_fusion)
-    gps_fusion = FuseSessionsWithGps(slam, *world_main, sessions, *world, stereo, frame_scale);
-
-  // A point that no adjustment held (seen from nearly one direction) may have run off towards infinity: not a
-  // place of the map, and one the map file refuses.
-  {
-    auto lock = map.WriteLock();
-    size_t culled = 0;
-    for (MapPoint* p : map.MapPoints()) {
-      if (p->position().allFinite() && p->position().cwiseAbs().maxCoeff() <= kMaxMapCoordinateM / 10)
-        continue;
-      p->SetBad();
-      map.EraseMapPoint(p);
-      ++culled;
-    }
-    if (culled > 0) spdlog::info("{} map points far beyond the map removed", culled);
-  }
+    gps_fusion = FuseSessionsWithGps(slam, *world_main, sessions, *world.frame, stereo, frame_scale);
+  RemoveRunawayPoints(map);
 
   // 7. Outputs.
-  std::uint32_t main_map = 0;
+  MergeOutputOptions output_options;
+  output_options.folder = options.output;
+  output_options.stereo = stereo;
+  output_options.frame_scale = frame_scale;
+  if (world_main) output_options.world = world.frame;
+  output_options.catalogues = atlas.catalogues;
   size_t num_keyframes = 0, num_points = 0, num_maps = 0;
   {
     auto lock = map.ReadLock();
-    main_map = world_main.value_or(map.MapWithMostKeyFrames());
+    output_options.main_map = world_main.value_or(map.MapWithMostKeyFrames());
     num_keyframes = map.NumKeyFrames();
     num_points = map.NumMapPoints();
     num_maps = map.MapIds().size();
   }
-  const std::optional<Georeference> georeference =
-      world_main ? std::optional<Georeference>(Georeference(*world, Sim3d())) : std::nullopt;
+  const std::uint32_t main_map = output_options.main_map;
+  const std::vector<fs::path>& catalogues = atlas.catalogues;
   const Alignment alignment = stereo ? Alignment::kSe3 : Alignment::kSim3;
-  nlohmann::json session_json = nlohmann::json::array();
-  GeoInputs geo;
-  // Trajectories against their truth, for one alignment of the whole city: each session shifted in time
-  // past the others.
-  Trajectory city_estimate, city_truth;
-  std::vector<std::pair<size_t, Trajectory>> session_estimates;  // index into session_json
-  std::vector<Trajectory> session_truths;
-  // The synthetic town's truth in its ENU frame, by drive (FramePose::segment), for the landmarks.
-  std::map<std::uint32_t, Trajectory> town_truths;
-  std::optional<EnuFrame> town_enu;
-  std::map<std::string, SceneTruth::Landmark> town_landmarks;  // by name: each drive's scene names its own
-  {
-    auto lock = map.ReadLock();
-    for (size_t k = 0; k < sessions.size(); ++k) {
-      SessionRecord& s = sessions[k];
-      const MapSession& info = map.sessions()[s.id];
-      const fs::path folder = fs::path("sessions") / SessionFolderName(info);
-      fs::create_directories(options.output / folder);
-      nlohmann::json j = {
-          {"id", s.id}, {"name", info.name}, {"source", info.source}, {"run", s.run.string()}};
-      const std::vector<FramePose> keyframes = SessionKeyFrames(s);
-      size_t unanchored = 0;
-      s.frames = SessionFrames(s, frame_scale, &unanchored);
-      std::map<std::uint32_t, size_t> frames_per_map;
-      for (const FramePose& f : s.frames) ++frames_per_map[f.map_id];
-      const size_t in_main = frames_per_map.count(main_map) ? frames_per_map.at(main_map) : 0;
-      j["frames"] = s.frames.size();
-      j["frames_in_main_map"] = in_main;
-      j["frames_without_keyframe"] = unanchored;
-      j["keyframes"] = keyframes.size();
-      j["in_main_map"] = in_main > 0 && in_main == s.frames.size();
-      nlohmann::json per_map = nlohmann::json::object();
-      for (const auto& [id, n] : frames_per_map) per_map[std::to_string(id)] = n;
-      j["frames_per_map"] = per_map;
-      if (s.input) {
-        j["sequence"] = s.input->sequence;
-        j["camera"] = s.input->camera;
-        j["gps"] = s.input->gps;
-        j["gps_every"] = s.input->gps_every;
-        if (s.input->lever_arm) {
-          j["gps_lever_arm"] = {s.input->lever_arm->x(), s.input->lever_arm->y(), s.input->lever_arm->z()};
-        }
-      }
-      const Trajectory trajectory = ToTrajectory(s.frames, main_map);
-      WriteTumTrajectory(options.output / folder / "trajectory.tum", trajectory);
-      WriteTumTrajectory(options.output / folder / "keyframes.tum", ToTrajectory(keyframes, main_map));
-      WriteFramesCsv(options.output / folder / "frames.csv", s.frames, main_map);
-      j["trajectory"] = (folder / "trajectory.tum").string();
-      j["frames_csv"] = (folder / "frames.csv").string();
-      if (georeference && in_main > 0) {
-        std::string text = "t,lat,lon,alt\n";
-        for (const StampedPose& p : trajectory) {
-          const Wgs84 w = georeference->MapToWgs84(p.world_from_camera.translation);
-          text += fmt::format("{:.6f},{:.9f},{:.9f},{:.3f}\n", p.timestamp, w.latitude_deg, w.longitude_deg,
-                              w.altitude_m);
-        }
-        WriteFileAtomically(options.output / folder / "trajectory_wgs84.csv", text);
-        j["trajectory_wgs84"] = (folder / "trajectory_wgs84.csv").string();
-      }
-      if (s.input && trajectory.size() >= 3) {
-        if (const std::optional<SessionTruth> truth = TruthOf(*s.input, stereo)) {
-          try {
-            const AteResult ate = ComputeAte(trajectory, truth->world_from_camera, alignment);
-            j["ate_rmse"] = ate.rmse;
-            j["ate_matched"] = ate.matched;
-            const double shift = 1e6 * static_cast<double>(session_estimates.size() + 1);
-            for (StampedPose p : trajectory)
-              city_estimate.push_back({p.timestamp + shift, p.world_from_camera});
-            for (StampedPose p : truth->world_from_camera)
-              city_truth.push_back({p.timestamp + shift, p.world_from_camera});
-            session_estimates.emplace_back(session_json.size(), trajectory);
-            session_truths.push_back(truth->world_from_camera);
-            if (truth->enu) {
-              town_truths[static_cast<std::uint32_t>(k)] = truth->world_from_camera;
-              town_enu = truth->enu;
-              for (const SceneTruth::Landmark& l : truth->landmarks) town_landmarks.emplace(l.name, l);
-            }
-            if (georeference && truth->enu) {
-              // Where the merged map puts the drive in the world, against where it was: no alignment.
-              Trajectory in_town = trajectory;
-              for (StampedPose& p : in_town) {
-                p.world_from_camera.translation =
-                    truth->enu->ToEnu(georeference->MapToWgs84(p.world_from_camera.translation));
-              }
-              j["world_rmse_m"] = ComputeAte(in_town, truth->world_from_camera, Alignment::kNone).rmse;
-            }
-          } catch (const EvaluationError& e) {
-            spdlog::warn("session {}: no ATE: {}", s.id, e.what());
-          }
-        }
-      }
-      session_json.push_back(std::move(j));
-      // The city's frames for the geographic outputs: the drives one after another, in frame-index ranges of
-      // their own.
-      if (in_main > 0) {
-        const size_t offset = k * 10'000'000;
-        for (FramePose f : s.frames) {
-          if (f.map_id != main_map || f.predicted) continue;
-          f.frame_index += offset;
-          f.segment = static_cast<std::uint32_t>(k);
-          geo.frames.push_back(f);
-        }
-        for (FramePose f : keyframes) {
-          if (f.map_id != main_map) continue;
-          f.frame_index += offset;
-          f.segment = static_cast<std::uint32_t>(k);
-          geo.keyframes.push_back(f);
-        }
-      }
-    }
-  }
-  // One alignment of every drive's trajectory together: how far each lies from the others in the merged map.
-  std::optional<double> city_ate;
-  if (session_estimates.size() >= 1) {
-    try {
-      const AteResult city = ComputeAte(city_estimate, city_truth, alignment);
-      city_ate = city.rmse;
-      for (size_t i = 0; i < session_estimates.size(); ++i) {
-        Trajectory aligned = session_estimates[i].second;
-        for (StampedPose& p : aligned)
-          p.world_from_camera = city.truth_from_estimate.TransformPose(p.world_from_camera);
-        session_json[session_estimates[i].first]["ate_rmse_city"] =
-            ComputeAte(aligned, session_truths[i], Alignment::kNone).rmse;
-      }
-    } catch (const EvaluationError& e) {
-      spdlog::warn("no city ATE: {}", e.what());
-    }
-  }
-
-  // Semantic map, landmarks, topology, objects, plots.
-  const std::vector<SemanticPoint> semantic_points = SemanticPoints(map);
-  WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
-  geo.map_id = main_map;
-  geo.monocular = !stereo;
-  {
-    auto lock = map.ReadLock();
-    for (const MapPoint* p : map.MapPointsOfMap(main_map)) {
-      const SemanticPoint sp = ToSemanticPoint(p->position(), p->labels());
-      if (IsValidTrainId(sp.label)) geo.points.push_back({sp.position, sp.label, sp.confidence});
-    }
-  }
-  if (georeference && !geo.frames.empty()) {
-    GeoInputs::Placed placed{*georeference};
-    for (const FramePose& f : geo.frames)
-      placed.single_similarity_enu.push_back(f.world_from_camera.translation);
-    geo.placed = std::move(placed);
-    if (!catalogues.empty()) geo.landmarks = UnionOfCatalogues(catalogues);
-  }
-  const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, {});
-  nlohmann::json landmark_evaluation = nullptr;
-  if (georeference && town_enu && !geo_outputs.landmarks.empty()) {
-    std::vector<SceneTruth::Landmark> truth_landmarks;
-    for (const auto& [name, landmark] : town_landmarks) truth_landmarks.push_back(landmark);
-    const nlohmann::json e =
-        nlohmann::json::parse(EvaluateLandmarksAcrossDrives(geo_outputs.landmarks, geo.keyframes, town_truths,
-                                                            EnuFromEnu(*town_enu, *world), truth_landmarks)
-                                  .ToJson());
-    if (e["landmarks"].get<int>() > 0) {
-      landmark_evaluation = nlohmann::json::object();
-      for (const char* key :
-           {"landmarks", "landmark_error_median_m", "landmark_error_max_m",
-            "landmark_error_horizontal_median_m", "landmark_error_horizontal_max_m", "landmark_errors"})
-        landmark_evaluation[key] = e[key];
-    }
-  }
+  const MergeOutputs outputs = WriteMergeOutputs(map, sessions, output_options);
+  const GeoOutputs& geo_outputs = outputs.geo;
   MapFileContents map_sections;
   map_sections.extra_sections = geo_outputs.map_sections;
   slam.SaveMap(options.output / "map.semslam", map_sections);
@@ -527,14 +395,14 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
                       {"session_loops", places.session_loops},
                       {"merges_not_confirmed", places.not_confirmed},
                       {"merge_events", merge_events},
-                      {"gps_joins", joins},
-                      {"sessions", session_json}};
-  if (city_ate) run_json["ate_rmse_city"] = *city_ate;
+                      {"gps_joins", joins.events},
+                      {"sessions", outputs.sessions}};
+  if (outputs.city_ate) run_json["ate_rmse_city"] = *outputs.city_ate;
   run_json["gps_fusion"] = gps_fusion;
   run_json["ate_alignment"] = AlignmentName(alignment);
-  run_json["classes"] = ClassCountsJson(CountLabels(semantic_points));
+  run_json["classes"] = ClassCountsJson(CountLabels(outputs.semantic_points));
   run_json["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
-  run_json["landmark_evaluation"] = landmark_evaluation;
+  run_json["landmark_evaluation"] = outputs.landmark_evaluation;
   run_json["provenance"] = ProvenanceJson(options.provenance);
   WriteFileAtomically(options.output / "run.json", run_json.dump(2) + "\n");
   WriteFileAtomically(options.output / "timing.json", TimingJson(slam.timing()).dump(2) + "\n");
@@ -546,14 +414,14 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   spdlog::info(
       "merged {} sessions of {} runs: {} maps left, {} merged by place recognition, {} joined by GPS, {} "
       "loops between drives",
-      sessions.size(), runs.size(), num_maps, places.merges, gps_joins, places.session_loops);
+      sessions.size(), runs.size(), num_maps, places.merges, joins.count, places.session_loops);
 
   SessionMergeSummary summary;
   summary.sessions = sessions.size();
   summary.maps = num_maps;
   summary.place_merges = places.merges;
   summary.session_loops = places.session_loops;
-  summary.gps_joins = gps_joins;
+  summary.gps_joins = joins.count;
   summary.seconds = watch.ElapsedSeconds();
   return summary;
 }
