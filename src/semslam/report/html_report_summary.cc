@@ -72,12 +72,10 @@ void AppendKeyValueTable(std::string& html, const std::string& caption, const st
   html += "</table>\n";
 }
 
-void AppendSummary(Page& page, const ReportInputs& in) {
-  const fs::path run_json = in.run_dir / "run.json";
-  const JsonFields f(run_json);
-  const json& run = in.run;
-  page.Open("summary", "Summary");
+namespace {
 
+// The run's table: frames, tracking, map, camera, time, memory and trajectory error.
+std::vector<KeyValue> RunRows(const JsonFields& f, const json& run) {
   std::vector<KeyValue> rows;
   if (const auto sequence = f.String(run, "sequence", "sequence"))
     rows.push_back({"Sequence", HtmlEscape(*sequence)});
@@ -160,10 +158,12 @@ void AppendSummary(Page& page, const ReportInputs& in) {
     }
     rows.push_back({"Trajectory error (ATE)", value});
   }
-  AppendKeyValueTable(page.body, "Run", rows);
+  return rows;
+}
 
-  // Semantics.
-  rows.clear();
+// The segmentation and the map labels' accuracy.
+std::vector<KeyValue> SemanticRows(const JsonFields& f, const json& run) {
+  std::vector<KeyValue> rows;
   const json* segmentation = f.Object(run, "segmentation", "segmentation");
   if (segmentation != nullptr) {
     if (const auto s = f.String(*segmentation, "segmenter", "segmentation.segmenter")) {
@@ -223,10 +223,12 @@ void AppendSummary(Page& page, const ReportInputs& in) {
     }
     rows.push_back({"Label accuracy (fused)", value});
   }
-  AppendKeyValueTable(page.body, "Semantics", rows);
+  return rows;
+}
 
-  // GPS, landmarks, topology, objects.
-  rows.clear();
+// GPS, landmarks, topology and objects.
+std::vector<KeyValue> GeoRows(const JsonFields& f, const json& run) {
+  std::vector<KeyValue> rows;
   if (const json* geo = f.Object(run, "geo", "geo")) {
     const bool georeferenced = f.Bool(*geo, "georeferenced", "geo.georeferenced").value_or(false);
     if (georeferenced) {
@@ -306,9 +308,11 @@ void AppendSummary(Page& page, const ReportInputs& in) {
       rows.push_back({"Trajectory error in ENU (no alignment)", value});
     }
   }
-  AppendKeyValueTable(page.body, "GPS, landmarks and topology", rows);
+  return rows;
+}
 
-  // Per-class counts and accuracies.
+// Map points per class, with the fused and single-frame accuracies.
+void AppendClassTable(std::string& html, const JsonFields& f, const json& run) {
   const json* classes = f.Object(run, "classes", "classes");
   if (classes != nullptr) {
     const json* fused_classes = nullptr;
@@ -351,7 +355,7 @@ void AppendSummary(Page& page, const ReportInputs& in) {
                      [](const auto& a, const auto& b) { return a.second > b.second; });
     if (other > 0) counts.emplace_back(kNoLabel, other);
     if (!counts.empty()) {
-      page.body +=
+      html +=
           "<table class=\"data sortable\">\n<caption>Map points per class</caption>\n<thead><tr>"
           "<th>class</th><th class=\"num\">points</th><th class=\"num\">share</th>"
           "<th class=\"num\">fused accuracy</th><th class=\"num\">single-frame "
@@ -371,7 +375,7 @@ void AppendSummary(Page& page, const ReportInputs& in) {
             id == kNoLabel ? (other_classes > 0 ? fmt::format("{} other classes, unlabeled", other_classes)
                                                 : std::string("unlabeled"))
                            : std::string(ClassName(id));
-        page.body += fmt::format(
+        html += fmt::format(
             "<tr><td><span class=\"swatch\" style=\"background:rgb({},{},{})\"></span>{}</td>{}{}{}{}</tr>\n",
             color.r, color.g, color.b, HtmlEscape(name), Cell(GroupThousands(n), static_cast<double>(n)),
             Cell(FormatPercent(static_cast<double>(n) / static_cast<double>(total)),
@@ -379,9 +383,20 @@ void AppendSummary(Page& page, const ReportInputs& in) {
             accuracy_cell(fused_classes, key, "label_evaluation.fused_points.per_class"),
             accuracy_cell(single_classes, key, "label_evaluation.single_frame_keypoints.per_class"));
       }
-      page.body += "</tbody>\n</table>\n";
+      html += "</tbody>\n</table>\n";
     }
   }
+}
+
+}  // namespace
+
+void AppendSummary(Page& page, const ReportInputs& in) {
+  const JsonFields f(in.run_dir / "run.json");
+  page.Open("summary", "Summary");
+  AppendKeyValueTable(page.body, "Run", RunRows(f, in.run));
+  AppendKeyValueTable(page.body, "Semantics", SemanticRows(f, in.run));
+  AppendKeyValueTable(page.body, "GPS, landmarks and topology", GeoRows(f, in.run));
+  AppendClassTable(page.body, f, in.run);
   page.Close();
 }
 
