@@ -109,6 +109,91 @@ std::map<std::uint32_t, Georeference> SessionGeoreferences(const std::vector<Loc
   return out;
 }
 
+// Frames first..end-1 tracked against the map, one after another: those with a pose. Stops at a signal or at
+// too many bad frames in a row; `frames_run` counts the frames read.
+std::vector<LocalizedFrame> LocalizeFrames(SlamSystem& slam, const ImageSequence& sequence, size_t first,
+                                           size_t end, FrameReader& reader, ProgressReporter& progress,
+                                           size_t* frames_run) {
+  std::vector<LocalizedFrame> localized;
+  for (size_t i = first; i < end && !InterruptRequested() && !reader.TooManyInRow(); ++i) {
+    ++*frames_run;
+    const std::optional<FrameImages> images = reader.Read(i);
+    if (!images) continue;
+    const TrackingResult result = slam.ProcessFrame(i, sequence.Timestamp(i), images->left, images->right);
+    if (result.state == TrackingState::kOk && result.camera_from_world) {
+      LocalizedFrame f;
+      f.frame = i;
+      f.timestamp = sequence.Timestamp(i);
+      f.relocalized = result.relocalized;
+      f.map_id = result.map_id;
+      f.world_from_camera = result.camera_from_world->Inverse();
+      localized.push_back(std::move(f));
+    }
+    progress.Update(i - first + 1, fmt::format("{} localized", localized.size()));
+  }
+  return localized;
+}
+
+// The camera tracking used: the map's, or the sequence's, and why.
+nlohmann::json TrackingCameraJson(const TrackingCameraChoice& camera) {
+  const PinholeCamera& c = camera.camera;
+  return {{"source", camera.map_id ? "map" : "sequence"},
+          {"map", camera.map_id ? nlohmann::json(*camera.map_id) : nlohmann::json()},
+          {"reason", camera.reason},
+          {"fx", c.fx},
+          {"fy", c.fy},
+          {"cx", c.cx},
+          {"cy", c.cy},
+          {"k1", c.distortion.k1},
+          {"k2", c.distortion.k2}};
+}
+
+// Errors against the truth of a synthetic-city sequence: in the world (the scene's ENU frame, no alignment)
+// and the nearest landmark when poses are in the world, else after one alignment of the trajectory.
+void AddErrorsAgainstTheScene(const ImageSequence& sequence, const std::vector<LocalizedFrame>& localized,
+                              const Trajectory& trajectory, bool stereo, LocalizeSummary& summary,
+                              nlohmann::json& report) {
+  const auto scene = sim::FindSceneJson(sequence.directory());
+  if (!scene || localized.empty()) return;
+  const SceneTruth truth = ReadSceneTruth(scene->parent_path());
+  std::vector<double> errors;
+  size_t landmark_checked = 0, landmark_right = 0;
+  if (summary.in_world > 0) {
+    // In the scene's ENU frame, without any alignment: the map's georeference against the drive's truth.
+    const EnuFrame scene_enu(truth.origin);
+    for (const LocalizedFrame& f : localized) {
+      if (f.frame >= truth.positions_world.size() || !f.geo) continue;
+      const Eigen::Vector3d true_enu = truth.TrueEnu(f.frame);
+      errors.push_back((scene_enu.ToEnu(f.geo->wgs84) - true_enu).norm());
+      if (!f.geo->nearest.empty() && !truth.landmarks.empty()) {
+        ++landmark_checked;
+        landmark_right += f.geo->nearest.front().name == NearestTrueLandmark(truth, true_enu) ? 1 : 0;
+      }
+    }
+    report["error_frame"] = "enu";
+  } else if (const auto ground_truth = sequence.GroundTruth(); ground_truth && localized.size() >= 3) {
+    const AteResult ate = ComputeAte(trajectory, *ground_truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+    errors = ate.errors;
+    report["error_frame"] = stereo ? "se3-aligned" : "sim3-aligned";
+  }
+  if (!errors.empty()) {
+    const auto within =
+        static_cast<double>(std::count_if(errors.begin(), errors.end(), [](double e) { return e < 1.0; }));
+    summary.within_1m = within / static_cast<double>(summary.frames);
+    std::vector<double> sorted = errors;
+    std::sort(sorted.begin(), sorted.end());
+    report["within_1m"] = summary.within_1m;
+    report["error_median_m"] = sorted[sorted.size() / 2];
+    report["error_p95_m"] = sorted[std::min(sorted.size() - 1, sorted.size() * 95 / 100)];
+    report["error_max_m"] = sorted.back();
+  }
+  if (landmark_checked > 0) {
+    summary.nearest_landmark_right =
+        static_cast<double>(landmark_right) / static_cast<double>(landmark_checked);
+    report["nearest_landmark_right"] = summary.nearest_landmark_right;
+  }
+}
+
 }  // namespace
 
 void LocalizeOptions::Check() const {
@@ -155,26 +240,11 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
         options.map.string());
   }
 
-  std::vector<LocalizedFrame> localized;
   ProgressReporter progress("localize", end - first, options.show_progress);
   FrameReader frame_reader(*sequence, stereo, options.max_bad_frames_in_row);
   size_t frames_run = 0;
-  for (size_t i = first; i < end && !InterruptRequested() && !frame_reader.TooManyInRow(); ++i) {
-    ++frames_run;
-    const std::optional<FrameImages> images = frame_reader.Read(i);
-    if (!images) continue;
-    const TrackingResult result = slam.ProcessFrame(i, sequence->Timestamp(i), images->left, images->right);
-    if (result.state == TrackingState::kOk && result.camera_from_world) {
-      LocalizedFrame f;
-      f.frame = i;
-      f.timestamp = sequence->Timestamp(i);
-      f.relocalized = result.relocalized;
-      f.map_id = result.map_id;
-      f.world_from_camera = result.camera_from_world->Inverse();
-      localized.push_back(std::move(f));
-    }
-    progress.Update(i - first + 1, fmt::format("{} localized", localized.size()));
-  }
+  std::vector<LocalizedFrame> localized =
+      LocalizeFrames(slam, *sequence, first, end, frame_reader, progress, &frames_run);
   slam.Finish();
   const SlamStatistics stats = slam.Statistics();
   progress.Finish(fmt::format("{} of {} frames localized, {} relocalizations", localized.size(), end - first,
@@ -234,58 +304,8 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
                            {"in_world", summary.in_world},
                            {"georeferenced", !geo.maps.empty()},
                            {"maps", maps}};
-  const TrackingCameraChoice& camera = slam.tracking_camera();
-  const PinholeCamera& c = camera.camera;
-  report["camera"] = {{"source", camera.map_id ? "map" : "sequence"},
-                      {"map", camera.map_id ? nlohmann::json(*camera.map_id) : nlohmann::json()},
-                      {"reason", camera.reason},
-                      {"fx", c.fx},
-                      {"fy", c.fy},
-                      {"cx", c.cx},
-                      {"cy", c.cy},
-                      {"k1", c.distortion.k1},
-                      {"k2", c.distortion.k2}};
-  // Errors against the truth of a synthetic-city sequence.
-  if (const auto scene = sim::FindSceneJson(sequence->directory()); scene && !localized.empty()) {
-    const SceneTruth truth = ReadSceneTruth(scene->parent_path());
-    std::vector<double> errors;
-    size_t landmark_checked = 0, landmark_right = 0;
-    if (summary.in_world > 0) {
-      // In the scene's ENU frame, without any alignment: the map's georeference against the drive's truth.
-      const EnuFrame scene_enu(truth.origin);
-      for (const LocalizedFrame& f : localized) {
-        if (f.frame >= truth.positions_world.size() || !f.geo) continue;
-        const Eigen::Vector3d true_enu = truth.TrueEnu(f.frame);
-        errors.push_back((scene_enu.ToEnu(f.geo->wgs84) - true_enu).norm());
-        if (!f.geo->nearest.empty() && !truth.landmarks.empty()) {
-          ++landmark_checked;
-          landmark_right += f.geo->nearest.front().name == NearestTrueLandmark(truth, true_enu) ? 1 : 0;
-        }
-      }
-      report["error_frame"] = "enu";
-    } else if (const auto ground_truth = sequence->GroundTruth(); ground_truth && localized.size() >= 3) {
-      const AteResult ate =
-          ComputeAte(trajectory, *ground_truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
-      errors = ate.errors;
-      report["error_frame"] = stereo ? "se3-aligned" : "sim3-aligned";
-    }
-    if (!errors.empty()) {
-      const auto within =
-          static_cast<double>(std::count_if(errors.begin(), errors.end(), [](double e) { return e < 1.0; }));
-      summary.within_1m = within / static_cast<double>(summary.frames);
-      std::vector<double> sorted = errors;
-      std::sort(sorted.begin(), sorted.end());
-      report["within_1m"] = summary.within_1m;
-      report["error_median_m"] = sorted[sorted.size() / 2];
-      report["error_p95_m"] = sorted[std::min(sorted.size() - 1, sorted.size() * 95 / 100)];
-      report["error_max_m"] = sorted.back();
-    }
-    if (landmark_checked > 0) {
-      summary.nearest_landmark_right =
-          static_cast<double>(landmark_right) / static_cast<double>(landmark_checked);
-      report["nearest_landmark_right"] = summary.nearest_landmark_right;
-    }
-  }
+  report["camera"] = TrackingCameraJson(slam.tracking_camera());
+  AddErrorsAgainstTheScene(*sequence, localized, trajectory, stereo, summary, report);
   summary.seconds = watch.ElapsedSeconds();
   report["seconds"] = summary.seconds;
   report["bad_frames"] = frame_reader.bad_frames().size();
