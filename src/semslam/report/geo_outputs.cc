@@ -148,20 +148,23 @@ void WriteTrajectoryPlots(const GeoInputs& inputs, const std::vector<FramePose>&
   write("rpe.png", RenderErrorPlot(rpe, Titled(options, "Relative pose error between consecutive frames")));
 }
 
-}  // namespace
-
-GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, const GeoOptions& options) {
-  options.Check();
-  CheckInputs(inputs);
-  fs::create_directories(out_dir);
-  GeoOutputs out;
-  GeoSummary& summary = out.summary;
-  const std::vector<FramePose>& trajectory = TrajectoryFrames(inputs);
-
-  // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion; or the placement found before.
-  std::optional<GpsLog> log = inputs.gps;
+// What the GPS plot shows besides the samples: which were inliers, and the trajectory placed by one
+// similarity (when the fusion placed the map).
+struct GpsPlotData {
   std::vector<bool> sample_inliers;
-  Points3d single_similarity_enu;  // per trajectory frame, for the GPS plot
+  Points3d single_similarity_enu;  // per trajectory frame
+};
+
+// The map's place in the world: found before (inputs.placed), or from the GPS log (read, sampled every N
+// frames, robust similarity, pose-graph fusion). Fills out.georeference, samples, alignment, fusion and the
+// summary's GPS figures.
+GpsPlotData PlaceByGps(const GeoInputs& inputs, const std::vector<FramePose>& trajectory,
+                       const GeoOptions& options, GeoOutputs& out) {
+  std::optional<GpsLog> log = inputs.gps;
+  GeoSummary& summary = out.summary;
+  GpsPlotData plot;
+  std::vector<bool>& sample_inliers = plot.sample_inliers;
+  Points3d& single_similarity_enu = plot.single_similarity_enu;
   if (inputs.placed) {
     const GeoInputs::Placed& placed = *inputs.placed;
     log.reset();
@@ -232,6 +235,84 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
           log->fixes.size(), fusion_options.sampling.every_n_frames);
     }
   }
+  return plot;
+}
+
+// The plots (plots/): trajectory, GPS, topology, semantic map and landmark membership, those the outputs
+// allow.
+void WriteGeoPlots(const GeoInputs& inputs, const std::vector<FramePose>& trajectory,
+                   const GeoOptions& options, const GpsPlotData& gps_plot, const fs::path& plots_dir,
+                   GeoOutputs& out) {
+  const auto write = [&](const std::string& name, const cv::Mat& image) {
+    WritePlot(plots_dir / name, image);
+    out.files.push_back(plots_dir / name);
+  };
+  // Without GPS the map is shown level (the first camera looking up the page), in map units when monocular.
+  const Georeference view_frame =
+      out.georeference ? *out.georeference : Georeference(EnuFrame(Wgs84{0, 0, 0}), LevelFromCameraWorld());
+  const Points3d trajectory_enu = TrajectoryEnu(trajectory, view_frame);
+  PlotOptions view_options = options.plots;
+  view_options.north_up = out.georeference.has_value();
+  view_options.metres = out.georeference.has_value() || !inputs.monocular;
+  WriteTrajectoryPlots(inputs, trajectory, options.plots, write);
+  if (out.georeference && !out.samples.empty()) {
+    GpsPlotInput gps;
+    for (const GpsSample& sample : out.samples) gps.gps_enu.push_back(sample.enu);
+    gps.gps_inliers = gps_plot.sample_inliers;
+    gps.single_sim3_enu = gps_plot.single_similarity_enu;
+    gps.trajectory_enu = trajectory_enu;
+    write("gps.png",
+          RenderGpsPlot(gps, Titled(options.plots, out.summary.fused
+                                                       ? "GPS fixes and the fused SLAM trajectory"
+                                                       : "GPS fixes and the transformed SLAM trajectory")));
+  }
+  if (out.topology)
+    write("topology.png", RenderTopologyPlot(*out.topology, Titled(options.plots, "Topological map")));
+  if (!inputs.points.empty()) {
+    Points3d points_enu;
+    std::vector<int> labels;
+    points_enu.reserve(inputs.points.size());
+    for (const LabeledPoint& p : inputs.points) {
+      points_enu.push_back(view_frame.MapToEnu(p.position));
+      labels.push_back(p.label);
+    }
+    write(
+        "semantic_map.png",
+        RenderSemanticMapPlot(points_enu, labels, trajectory_enu,
+                              Titled(view_options, out.georeference ? "Semantic map (top view, north up)"
+                                                                    : "Semantic map (top view, map frame)")));
+  }
+  if (out.georeference && !out.landmarks.empty()) {
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Eigen::Vector3d& p : trajectory_enu) {
+      lo = lo.cwiseMin(p.head<2>());
+      hi = hi.cwiseMax(p.head<2>());
+    }
+    for (const PlacedLandmark& l : out.landmarks) {
+      lo = lo.cwiseMin(l.enu.head<2>());
+      hi = hi.cwiseMax(l.enu.head<2>());
+    }
+    const double pad = 3.0 * options.landmarks.sigma_m;
+    const MembershipRaster raster =
+        RasterizeMembership(out.landmarks, lo.array() - pad, hi.array() + pad, options.raster_cell_m,
+                            options.landmarks.sigma_m, 1'000'000);
+    write("membership.png", RenderMembershipPlot(raster, out.landmarks, trajectory_enu,
+                                                 Titled(options.plots, "Landmark membership m(x, y)")));
+  }
+}
+
+}  // namespace
+
+GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, const GeoOptions& options) {
+  options.Check();
+  CheckInputs(inputs);
+  fs::create_directories(out_dir);
+  GeoOutputs out;
+  GeoSummary& summary = out.summary;
+  const std::vector<FramePose>& trajectory = TrajectoryFrames(inputs);
+
+  // 1. GPS: read, sample every N frames, robust similarity, pose-graph fusion; or the placement found before.
+  const GpsPlotData gps_plot = PlaceByGps(inputs, trajectory, options, out);
   summary.georeferenced = out.georeference.has_value();
   if (out.georeference) summary.metres_per_map_unit = out.georeference->MetresPerMapUnit();
 
@@ -297,65 +378,7 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
   }
 
   // 6. Plots.
-  if (options.write_plots) {
-    const fs::path plots = out_dir / "plots";
-    const auto write = [&](const std::string& name, const cv::Mat& image) {
-      WritePlot(plots / name, image);
-      out.files.push_back(plots / name);
-    };
-    // Without GPS the map is shown level (the first camera looking up the page), in map units when monocular.
-    const Georeference view_frame =
-        out.georeference ? *out.georeference : Georeference(EnuFrame(Wgs84{0, 0, 0}), LevelFromCameraWorld());
-    const Points3d trajectory_enu = TrajectoryEnu(trajectory, view_frame);
-    PlotOptions view_options = options.plots;
-    view_options.north_up = out.georeference.has_value();
-    view_options.metres = out.georeference.has_value() || !inputs.monocular;
-    WriteTrajectoryPlots(inputs, trajectory, options.plots, write);
-    if (out.georeference && !out.samples.empty()) {
-      GpsPlotInput gps;
-      for (const GpsSample& sample : out.samples) gps.gps_enu.push_back(sample.enu);
-      gps.gps_inliers = sample_inliers;
-      gps.single_sim3_enu = single_similarity_enu;
-      gps.trajectory_enu = trajectory_enu;
-      write("gps.png",
-            RenderGpsPlot(
-                gps, Titled(options.plots, summary.fused ? "GPS fixes and the fused SLAM trajectory"
-                                                         : "GPS fixes and the transformed SLAM trajectory")));
-    }
-    if (out.topology)
-      write("topology.png", RenderTopologyPlot(*out.topology, Titled(options.plots, "Topological map")));
-    if (!inputs.points.empty()) {
-      Points3d points_enu;
-      std::vector<int> labels;
-      points_enu.reserve(inputs.points.size());
-      for (const LabeledPoint& p : inputs.points) {
-        points_enu.push_back(view_frame.MapToEnu(p.position));
-        labels.push_back(p.label);
-      }
-      write("semantic_map.png",
-            RenderSemanticMapPlot(
-                points_enu, labels, trajectory_enu,
-                Titled(view_options, out.georeference ? "Semantic map (top view, north up)"
-                                                      : "Semantic map (top view, map frame)")));
-    }
-    if (out.georeference && !out.landmarks.empty()) {
-      Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-      for (const Eigen::Vector3d& p : trajectory_enu) {
-        lo = lo.cwiseMin(p.head<2>());
-        hi = hi.cwiseMax(p.head<2>());
-      }
-      for (const PlacedLandmark& l : out.landmarks) {
-        lo = lo.cwiseMin(l.enu.head<2>());
-        hi = hi.cwiseMax(l.enu.head<2>());
-      }
-      const double pad = 3.0 * options.landmarks.sigma_m;
-      const MembershipRaster raster =
-          RasterizeMembership(out.landmarks, lo.array() - pad, hi.array() + pad, options.raster_cell_m,
-                              options.landmarks.sigma_m, 1'000'000);
-      write("membership.png", RenderMembershipPlot(raster, out.landmarks, trajectory_enu,
-                                                   Titled(options.plots, "Landmark membership m(x, y)")));
-    }
-  }
+  if (options.write_plots) WriteGeoPlots(inputs, trajectory, options, gps_plot, out_dir / "plots", out);
   return out;
 }
 
