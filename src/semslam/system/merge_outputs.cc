@@ -39,7 +39,7 @@ Trajectory ToTrajectory(const std::vector<FramePose>& frames, std::uint32_t map_
 // past the others.
 struct CityTruth {
   Trajectory estimate, truth;
-  std::vector<std::pair<size_t, Trajectory>> drives;  // index into the sessions' json, the drive's trajectory
+  std::vector<std::pair<size_t, Trajectory>> drives;  // the session's index, its trajectory
   std::vector<Trajectory> drive_truths;
   // The synthetic town's truth in its ENU frame, by drive (FramePose::segment), for the landmarks.
   std::map<std::uint32_t, Trajectory> town_truths;
@@ -47,8 +47,8 @@ struct CityTruth {
   std::map<std::string, SceneTruth::Landmark> town_landmarks;  // by name: each drive's scene names its own
 };
 
-// A drive's ATE against its truth (alone, and in the world without alignment), gathered into `city`.
-void EvaluateSession(const SessionTruth& truth, const Trajectory& trajectory, size_t json_index, size_t k,
+// Session k's ATE against its truth (alone, and in the world without alignment), gathered into `city`.
+void EvaluateSession(const SessionTruth& truth, const Trajectory& trajectory, size_t k,
                      const std::optional<Georeference>& georeference, Alignment alignment, nlohmann::json& j,
                      CityTruth& city) {
   const AteResult ate = ComputeAte(trajectory, truth.world_from_camera, alignment);
@@ -58,7 +58,7 @@ void EvaluateSession(const SessionTruth& truth, const Trajectory& trajectory, si
   for (StampedPose p : trajectory) city.estimate.push_back({p.timestamp + shift, p.world_from_camera});
   for (StampedPose p : truth.world_from_camera)
     city.truth.push_back({p.timestamp + shift, p.world_from_camera});
-  city.drives.emplace_back(json_index, trajectory);
+  city.drives.emplace_back(k, trajectory);
   city.drive_truths.push_back(truth.world_from_camera);
   if (truth.enu) {
     city.town_truths[static_cast<std::uint32_t>(k)] = truth.world_from_camera;
@@ -79,8 +79,8 @@ void EvaluateSession(const SessionTruth& truth, const Trajectory& trajectory, si
 // One session's folder and run.json entry; its frames (and keyframes) in the main map join the city's
 // geographic inputs.
 nlohmann::json WriteSession(const Map& map, SessionRecord& s, size_t k, const MergeOutputOptions& options,
-                            const std::optional<Georeference>& georeference, size_t json_index,
-                            CityTruth& city, GeoInputs& geo) {
+                            const std::optional<Georeference>& georeference, CityTruth& city,
+                            GeoInputs& geo) {
   const std::uint32_t main_map = options.main_map;
   const MapSession& info = map.sessions()[s.id];
   const fs::path folder = fs::path("sessions") / SessionFolderName(info);
@@ -128,7 +128,7 @@ nlohmann::json WriteSession(const Map& map, SessionRecord& s, size_t k, const Me
   if (s.input && trajectory.size() >= 3) {
     if (const std::optional<SessionTruth> truth = TruthOf(*s.input, options.stereo)) {
       try {
-        EvaluateSession(*truth, trajectory, json_index, k, georeference,
+        EvaluateSession(*truth, trajectory, k, georeference,
                         options.stereo ? Alignment::kSe3 : Alignment::kSim3, j, city);
       } catch (const EvaluationError& e) {
         spdlog::warn("session {}: no ATE: {}", s.id, e.what());
@@ -186,8 +186,7 @@ MergeOutputs WriteMergeOutputs(const Map& map, std::vector<SessionRecord>& sessi
   {
     auto lock = map.ReadLock();
     for (size_t k = 0; k < sessions.size(); ++k) {
-      out.sessions.push_back(
-          WriteSession(map, sessions[k], k, options, georeference, out.sessions.size(), city, geo));
+      out.sessions.push_back(WriteSession(map, sessions[k], k, options, georeference, city, geo));
     }
   }
   out.city_ate = CityAte(city, options.stereo ? Alignment::kSe3 : Alignment::kSim3, out.sessions);

@@ -61,7 +61,19 @@ std::optional<Trajectory> TruthOverFrames(const Trajectory& truth, double first_
 
 }  // namespace
 
-double AddLabelFigures(const Map& map, const ImageSequence& sequence, const Trajectory& trajectory,
+std::optional<AteResult> TrajectoryAgainstTruth(const ImageSequence& sequence, const Trajectory& trajectory,
+                                                bool stereo) {
+  const auto truth = sequence.GroundTruth();
+  if (!truth || trajectory.size() < 3) return std::nullopt;
+  try {
+    return ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
+  } catch (const EvaluationError& e) {
+    spdlog::warn("no accuracy figures: {}", e.what());
+    return std::nullopt;
+  }
+}
+
+double AddLabelFigures(const Map& map, const ImageSequence& sequence, const std::optional<AteResult>& ate,
                        bool stereo, size_t segmented_keyframes, nlohmann::json& run) {
   const auto label_dir = sequence.LabelDirectory();
   if (!label_dir || segmented_keyframes == 0) return -1.0;
@@ -72,12 +84,10 @@ double AddLabelFigures(const Map& map, const ImageSequence& sequence, const Traj
                              {"single_frame_keypoints", AccuracyJson(evaluation.single_frame)},
                              {"points_unlabeled", evaluation.points_unlabeled},
                              {"keyframes", evaluation.keyframes}};
-  const auto truth = sequence.GroundTruth();
-  if (const auto depth_dir = sequence.DepthDirectory(); depth_dir && truth && trajectory.size() >= 3) {
+  if (const auto depth_dir = sequence.DepthDirectory(); depth_dir && ate) {
     try {
-      const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
-      const SurfaceEvaluation surface =
-          EvaluateSemantics3d(map, {*label_dir, *depth_dir, *truth, ate.truth_from_estimate, stereo});
+      const SurfaceEvaluation surface = EvaluateSemantics3d(
+          map, {*label_dir, *depth_dir, *sequence.GroundTruth(), ate->truth_from_estimate, stereo});
       label_accuracy = surface.global.points.Accuracy();
       run["label_accuracy_3d"] = surface.per_frame.points.Accuracy();
       run["label_accuracy_3d_global"] = surface.global.points.Accuracy();
@@ -92,31 +102,27 @@ double AddLabelFigures(const Map& map, const ImageSequence& sequence, const Traj
   return label_accuracy;
 }
 
-double AddTrajectoryFigures(const ImageSequence& sequence, const Trajectory& trajectory, size_t first_frame,
-                            size_t last_frame, bool stereo, const GeoOutputs& geo_outputs,
+double AddTrajectoryFigures(const ImageSequence& sequence, const std::optional<AteResult>& ate,
+                            size_t first_frame, size_t last_frame, bool stereo, const GeoOutputs& geo_outputs,
                             const GeoInputs& geo, nlohmann::json& run) {
-  double ate_rmse = -1.0;
-  if (const auto truth = sequence.GroundTruth(); truth && trajectory.size() >= 3) {
-    try {
-      const AteResult ate = ComputeAte(trajectory, *truth, stereo ? Alignment::kSe3 : Alignment::kSim3);
-      ate_rmse = ate.rmse;
-      run["ate_rmse"] = ate.rmse;
-      run["ate_alignment"] = stereo ? "se3" : "sim3";
-      run["ate_scale"] = ate.scale;
-      run["ate_matched"] = ate.matched;
-      if (const auto driven =
-              TruthOverFrames(*truth, sequence.Timestamp(first_frame), sequence.Timestamp(last_frame))) {
-        run["path_length_m"] = PathLength(*driven);
-      }
-      if (const auto scene = sim::FindSceneJson(sequence.directory()); scene && geo_outputs.georeference) {
-        const SceneTruth truth_scene = ReadSceneTruth(scene->parent_path());
-        run["geo_evaluation"] = nlohmann::json::parse(EvaluateGeo(geo_outputs, geo, truth_scene).ToJson());
-      }
-    } catch (const EvaluationError& e) {
-      spdlog::warn("no accuracy figures: {}", e.what());
+  if (!ate) return -1.0;
+  run["ate_rmse"] = ate->rmse;
+  run["ate_alignment"] = stereo ? "se3" : "sim3";
+  run["ate_scale"] = ate->scale;
+  run["ate_matched"] = ate->matched;
+  try {
+    if (const auto driven = TruthOverFrames(*sequence.GroundTruth(), sequence.Timestamp(first_frame),
+                                            sequence.Timestamp(last_frame))) {
+      run["path_length_m"] = PathLength(*driven);
     }
+    if (const auto scene = sim::FindSceneJson(sequence.directory()); scene && geo_outputs.georeference) {
+      const SceneTruth truth_scene = ReadSceneTruth(scene->parent_path());
+      run["geo_evaluation"] = nlohmann::json::parse(EvaluateGeo(geo_outputs, geo, truth_scene).ToJson());
+    }
+  } catch (const EvaluationError& e) {
+    spdlog::warn("no accuracy figures: {}", e.what());
   }
-  return ate_rmse;
+  return ate->rmse;
 }
 
 }  // namespace semslam

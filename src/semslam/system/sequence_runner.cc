@@ -456,10 +456,11 @@ RunSummary RunSequence(const RunOptions& options) {
     segmentation["median_ms"] = worker->segmentation_ms.median_ms;
   }
   run["segmentation"] = segmentation;
+  const std::optional<AteResult> ate = TrajectoryAgainstTruth(*sequence, trajectory, stereo);
   summary.label_accuracy =
-      AddLabelFigures(slam.map(), *sequence, trajectory, stereo, stats.segmented_keyframes, run);
+      AddLabelFigures(slam.map(), *sequence, ate, stereo, stats.segmented_keyframes, run);
   summary.ate_rmse =
-      AddTrajectoryFigures(*sequence, trajectory, first, loop.last_frame, stereo, geo_outputs, geo, run);
+      AddTrajectoryFigures(*sequence, ate, first, loop.last_frame, stereo, geo_outputs, geo, run);
   run["geo"] = nlohmann::json::parse(geo_outputs.summary.ToJson());
   if (placed_by_gps) run["geo"]["maps"] = MapsInTheWorldJson(*placed_by_gps);
   run["provenance"] = ProvenanceJson(options.provenance);
