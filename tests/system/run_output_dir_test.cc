@@ -68,6 +68,28 @@ TEST(RunOutputDir, AFolderOfOtherFilesIsNeverEmptied) {
   EXPECT_FALSE(fs::exists(dir / kOutputLockFile)) << "the folder is left as it was";
 }
 
+TEST(RunOutputDir, AFolderHoldingAnInputIsNeverEmptied) {
+  testing::TempDir tmp;
+  const fs::path dir = tmp / "out";
+  { RunOutputDir out(dir); }
+  std::ofstream(dir / "run.json") << "{}";
+  std::ofstream(dir / "map.semslam") << "map";
+  OutputDirOptions overwrite;
+  overwrite.overwrite = true;
+  // The input named the way a user types it: through a relative detour.
+  overwrite.inputs = {fs::path(), tmp / "elsewhere.csv", tmp / "out" / ".." / "out" / "map.semslam"};
+  const std::string refused = ErrorOf(dir, overwrite);
+  EXPECT_NE(refused.find("map.semslam, which this run reads"), std::string::npos) << refused;
+  EXPECT_TRUE(fs::exists(dir / "map.semslam"));
+  EXPECT_TRUE(fs::exists(dir / "run.json"));
+  // The folder itself as an input (a merge given its own output), and an input beside it.
+  overwrite.inputs = {dir};
+  EXPECT_NE(ErrorOf(dir, overwrite).find("which this run reads"), std::string::npos);
+  overwrite.inputs = {tmp / "out2" / "map.semslam"};
+  EXPECT_EQ(ErrorOf(dir, overwrite), "");
+  EXPECT_FALSE(fs::exists(dir / "map.semslam"));
+}
+
 TEST(RunOutputDir, ASecondWriterIsRefused) {
   testing::TempDir tmp;
   const fs::path dir = tmp / "out";

@@ -217,6 +217,7 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   OutputDirOptions output_dir_options;
   output_dir_options.overwrite = options.overwrite;
   output_dir_options.command = "localize";
+  output_dir_options.inputs = {options.map, options.sequence, options.gps};
   const RunOutputDir output_dir(options.output, output_dir_options);
   SlamSystem slam(slam_options, sequence->camera(), sequence->stereo());
   const MapFileContents contents = slam.LoadMap(options.map);

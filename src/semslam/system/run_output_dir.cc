@@ -7,8 +7,10 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 #include <vector>
@@ -27,6 +29,21 @@ bool HoldsSemslamOutputs(const fs::path& dir, bool had_lock_file) {
   std::error_code ec;
   return had_lock_file || fs::exists(dir / "run.json", ec) || fs::exists(dir / "localize.json", ec) ||
          fs::exists(dir / "map.semslam", ec) || fs::exists(dir / "trajectory.tum", ec);
+}
+
+// The first of `inputs` that lies in `dir` (or is `dir`), compared by their absolute, normalized paths.
+std::optional<fs::path> InputInside(const fs::path& dir, const std::vector<fs::path>& inputs) {
+  std::error_code ec;
+  const fs::path folder = fs::weakly_canonical(dir, ec);
+  if (ec) return std::nullopt;
+  for (const fs::path& input : inputs) {
+    if (input.empty()) continue;
+    const fs::path path = fs::weakly_canonical(input, ec);
+    if (ec) continue;
+    const auto [folder_end, path_end] = std::mismatch(folder.begin(), folder.end(), path.begin(), path.end());
+    if (folder_end == folder.end()) return input;
+  }
+  return std::nullopt;
 }
 
 std::string ReadSmallFile(int fd) {
@@ -114,6 +131,10 @@ RunOutputDir::RunOutputDir(fs::path dir, const OutputDirOptions& options) : dir_
         fmt::format("{}: --out is not empty and holds no semslam outputs ({} entries, e.g. {}); choose a new "
                     "or empty folder",
                     dir_.string(), entries.size(), entries.front().filename().string()));
+  }
+  if (const std::optional<fs::path> input = InputInside(dir_, options.inputs)) {
+    refuse(fmt::format("{}: --out holds {}, which this {} reads; choose another folder for its outputs",
+                       dir_.string(), input->string(), options.command));
   }
   if (!options.overwrite) {
     refuse(

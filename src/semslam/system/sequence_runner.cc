@@ -307,6 +307,7 @@ RunSummary RunSequence(const RunOptions& options) {
   // Writable, not in use by another run, and nothing of an earlier run left in it: before the first frame.
   OutputDirOptions output_dir_options;
   output_dir_options.overwrite = options.overwrite;
+  output_dir_options.inputs = {options.sequence, options.map_in, options.gps, options.landmarks};
   const RunOutputDir output_dir(options.output, output_dir_options);
   const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
   spdlog::info("sequence {} ({}{}), frames {}..{}, {} mode, camera {}", sequence->name(),

@@ -307,6 +307,8 @@ SessionMergeSummary MergeSessions(const SessionMergeOptions& options) {
   OutputDirOptions output_dir_options;
   output_dir_options.overwrite = options.overwrite;
   output_dir_options.command = "merge";
+  output_dir_options.inputs = options.runs;
+  output_dir_options.inputs.push_back(options.vocabulary);
   const RunOutputDir output_dir(options.output, output_dir_options);
   const LogFile log(options.output / kOutputLogFile, ProvenanceLines(options.provenance));
   const std::unique_ptr<SlamSystem> system = MakeAtlasSystem(runs.front(), stereo, options);
