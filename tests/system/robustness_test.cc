@@ -251,6 +251,9 @@ TEST_F(Robustness, AZeroByteFrameIsSkippedAndTheRunSavesItsWork) {
   EXPECT_TRUE(fs::exists(out_ / "trajectory.tum"));
   EXPECT_TRUE(fs::exists(out_ / "map.semslam"));
   EXPECT_THAT(ReadText(out_ / "tracking.csv"), HasSubstr("\n3,bad_frame,"));
+  // One line per frame of the sequence, the skipped one's and those after it included.
+  const std::string kitti = ReadText(out_ / "trajectory.kitti");
+  EXPECT_EQ(Count(kitti, "\n"), Count(ReadText(sequence_ / "times.txt"), "\n"));
 }
 
 TEST_F(Robustness, TruncatedAndOddSizedFramesAreSkipped) {

@@ -366,8 +366,8 @@ RunSummary RunSequence(const RunOptions& options) {
   WriteFramesCsv(options.output / "frames.csv", slam);
   WriteTumTrajectory(options.output / "keyframes.tum", slam.KeyFrameTrajectory());
   const DenseTrajectory kitti = WriteKittiFrameTrajectory(
-      options.output / "trajectory.kitti", slam.FramePoses(), first, first + stats.frames,
-      std::span<const double>(frame_times).first(stats.frames));
+      options.output / "trajectory.kitti", slam.FramePoses(), first, first + loop.frames_run,
+      std::span<const double>(frame_times).first(loop.frames_run));  // skipped frames get their lines too
   const std::vector<SemanticPoint> semantic_points = SemanticPoints(slam.map());
   WriteSemanticPly(options.output / "semantic_map.ply", semantic_points);
 
