@@ -28,6 +28,7 @@ struct SynthArgs {
   std::optional<double> lat, lon, alt;
   std::optional<double> start_epoch;
   bool reverse = false;
+  bool overwrite = false;
   bool quiet = false;
 };
 
@@ -66,6 +67,7 @@ void Synth(const SynthArgs& a) {
       city.route().length, city.route().turns.size(), city.Revisits().size(), city.Landmarks().size(), a.out);
   sim::DatasetOptions d;
   d.progress = !a.quiet && !Quiet();
+  d.overwrite = a.overwrite;
   sim::WriteDataset(city, a.out, d);
 }
 
@@ -94,6 +96,7 @@ void AddSynthCommand(CLI::App& app) {
       "Another drive through the same town (same streets, landmarks and origin): drives of any two "
       "route seeds share streets both ways; without it, the town's first route");
   cmd->add_flag("--reverse", args->reverse, "Drive the same streets in the opposite direction");
+  cmd->add_flag("--overwrite", args->overwrite, "Replace an earlier synthetic dataset in the output folder");
   cmd->add_option("--origin-lat", args->lat, "WGS84 latitude of the town origin (default 49.0)");
   cmd->add_option("--origin-lon", args->lon, "WGS84 longitude of the town origin (default 8.4)");
   cmd->add_option("--origin-alt", args->alt, "Altitude of the town origin, metres (default 115)");

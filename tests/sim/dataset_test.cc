@@ -66,7 +66,15 @@ TEST(Dataset, LayoutAndIdenticalBytes) {
   const cv::Mat depth = cv::imread((seq / "depth_0" / "000002.png").string(), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(depth.type(), CV_16UC1);
   EXPECT_EQ(cv::norm(depth, r.depth, cv::NORM_INF), 0);
-  // A shorter run into the same folder leaves no stale frames behind.
+  // A shorter run into the same folder leaves no stale frames behind, when asked to replace it.
+  try {
+    WriteDataset(SyntheticCity(Tiny(2)), a.path(), options);
+    ADD_FAILURE() << "an earlier dataset replaced without overwrite";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("pass --overwrite"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(fs::exists(seq / "image_0" / "000002.png"));
+  options.overwrite = true;
   WriteDataset(SyntheticCity(Tiny(2)), a.path(), options);
   EXPECT_FALSE(fs::exists(seq / "image_0" / "000002.png"));
   EXPECT_FALSE(fs::exists(a.path() / "oxts" / "data" / "0000000002.txt"));
@@ -218,6 +226,18 @@ TEST(SynthCli, WritesADatasetAndRejectsBadArguments) {
   EXPECT_EQ(j2["options"]["route"]["route_seed"], 2);
   EXPECT_EQ(j2["origin"], j["origin"]);
   EXPECT_NE(j2["enu_from_world"]["translation"], j["enu_from_world"]["translation"]);
+  // A folder of other files is never written into, an earlier dataset only with --overwrite.
+  fs::create_directories(dir / "kitti" / "sequences" / "00");
+  std::ofstream(dir / "kitti" / "sequences" / "00" / "times.txt") << "0.0\n";
+  r = testing::RunSemslam({"synth", "--out", (dir / "kitti").string(), "--frames", "1", "--overwrite", "-q"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("holds no synthetic dataset"), std::string::npos) << r.err;
+  EXPECT_EQ(testing::ReadText(dir / "kitti" / "sequences" / "00" / "times.txt"), "0.0\n");
+  r = testing::RunSemslam(
+      {"synth", "--out", (dir / "ok").string(), "--frames", "1", "--preset", "small", "-q"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("pass --overwrite"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir / "ok" / "sequences" / "00" / "image_1" / "000001.png"));
   r = testing::RunSemslam({"synth", "--out", (dir / "x").string(), "--route-seed", "0"});
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--route-seed"), std::string::npos) << r.err;

@@ -12,6 +12,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/io/kitti_odometry.h"
 #include "semslam/io/kitti_raw.h"
@@ -302,10 +303,42 @@ void WriteFrame(const SyntheticCity& sim, size_t frame, const fs::path& sequence
   WriteFrameImages(sim.Render(frame, kRenderAll), frame, sequence_dir, png_compression);
 }
 
+namespace {
+
+void CheckOutputFolder(const fs::path& out, bool overwrite) {
+  std::error_code ec;
+  if (!fs::is_directory(out, ec)) return;
+  size_t entries = 0;
+  std::string example;
+  for (const auto& entry : fs::directory_iterator(out, ec)) {
+    if (entries++ == 0) example = entry.path().filename().string();
+  }
+  if (entries == 0) return;
+  if (!fs::exists(out / "scene.json", ec)) {
+    throw InvalidArgument(fmt::format(
+        "{}: the output folder is not empty and holds no synthetic dataset ({} entries, e.g. {}); choose a "
+        "new or empty folder",
+        out.string(), entries, example));
+  }
+  if (!overwrite) {
+    throw InvalidArgument(fmt::format(
+        "{}: the output folder holds an earlier synthetic dataset; pass --overwrite to replace it, or choose "
+        "another folder",
+        out.string()));
+  }
+}
+
+}  // namespace
+
 void WriteDataset(const SyntheticCity& sim, const fs::path& out, const DatasetOptions& options) {
   options.Check();
   Require(!out.empty(), "WriteDataset: empty output folder");
+  CheckOutputFolder(out, options.overwrite);
   const fs::path seq_dir = out / "sequences" / options.sequence;
+  {
+    std::error_code ec;
+    fs::remove(seq_dir / "times.txt", ec);  // the earlier dataset's, until this one is complete
+  }
   for (const char* sub : {"image_0", "image_1", "label_0", "depth_0"}) {
     std::error_code ec;
     fs::create_directories(seq_dir / sub, ec);
@@ -321,9 +354,6 @@ void WriteDataset(const SyntheticCity& sim, const fs::path& out, const DatasetOp
   }
   WriteFileAtomically(out / "landmarks.csv", LandmarksCsv(sim));
   WriteKittiCalibration(seq_dir / "calib.txt", MakeKittiCalibration(sim.rig()));
-  std::vector<double> times(sim.num_frames());
-  for (size_t f = 0; f < times.size(); ++f) times[f] = sim.Timestamp(f);
-  WriteTimes(seq_dir / "times.txt", times);
   WriteKittiPoses(out / "poses" / (options.sequence + ".txt"), sim.WorldFromCameraAll());
   WriteOxtsFolder(out / "oxts", SimulateOxts(sim));
 
@@ -331,13 +361,24 @@ void WriteDataset(const SyntheticCity& sim, const fs::path& out, const DatasetOp
   std::atomic<size_t> done{0};
   std::mutex progress_mutex;
   tbb::parallel_for(size_t{0}, sim.num_frames(), [&](size_t f) {
+    if (InterruptRequested()) return;
     WriteFrame(sim, f, seq_dir, options.png_compression);
     const size_t n = ++done;
     std::lock_guard<std::mutex> lock(progress_mutex);
     progress.Update(n);
   });
+  if (InterruptRequested()) {
+    throw Interrupted(
+        InterruptSignal(),
+        fmt::format("synth: interrupted by {} after {} of {} frames; {} is incomplete (it has no "
+                    "times.txt): render it again with --overwrite",
+                    InterruptName(), done.load(), sim.num_frames(), out.string()));
+  }
   for (const char* sub : {"image_0", "image_1", "label_0", "depth_0"})
     RemoveStale(seq_dir / sub, sim.num_frames());
+  std::vector<double> times(sim.num_frames());
+  for (size_t f = 0; f < times.size(); ++f) times[f] = sim.Timestamp(f);
+  WriteTimes(seq_dir / "times.txt", times);
   progress.Finish(fmt::format("{} frames, {:.0f} m", sim.num_frames(), sim.route().length));
 }
 

@@ -25,10 +25,15 @@ struct DatasetOptions {
   std::string sequence = "00";
   bool progress = true;  // progress lines on stderr
   int png_compression = 1;
+  // An earlier synthetic dataset in the folder (its scene.json) is replaced only when set; a folder holding
+  // anything else is never written into.
+  bool overwrite = false;
   void Check() const;
 };
 
-// Throws InputError naming DIR when it cannot be created or written.
+// Throws InputError naming DIR when it cannot be created or written, InvalidArgument when it holds files
+// (see `overwrite`). times.txt is written last: a dataset whose writer was stopped has none. Stops at an
+// interruption (core/interrupt.h) and throws Interrupted.
 void WriteDataset(const SyntheticCity& sim, const std::filesystem::path& out,
                   const DatasetOptions& options = {});
 

@@ -28,6 +28,7 @@ void RenderDrive(const DemoOptions& options, int frames, std::uint64_t traffic_s
   spdlog::info("demo: rendering {} frames into {}", frames, out.string());
   sim::DatasetOptions dataset;
   dataset.progress = options.show_progress;
+  dataset.overwrite = true;  // the demo's own folder
   sim::WriteDataset(city, out, dataset);
 }
 
