@@ -27,8 +27,9 @@ void Compose(const ComposeArgs& a) {
   const std::unique_ptr<ImageSequence> source = OpenSequence(a.sequence);
   size_t black_first = 0, black_end = 0;
   if (!a.black.empty()) ParseFrameRange(a.black, &black_first, &black_end);
-  WriteComposedSequence(*source, ComposeFrames(ParseFrameList(a.frames), black_first, black_end), a.out,
-                        a.stereo, /*show_progress=*/!a.quiet && !Quiet());
+  WriteComposedSequence(*source,
+                        ComposeFrames(ParseFrameList(a.frames, source->size()), black_first, black_end),
+                        a.out, a.stereo, /*show_progress=*/!a.quiet && !Quiet());
 }
 
 }  // namespace

@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/io/image_folder.h"
 #include "semslam/io/sequence.h"
 #include "support/test_support.h"
@@ -16,10 +18,19 @@ namespace semslam {
 namespace {
 
 TEST(ParseFrameList, RangesRunBothWaysAndSingleFramesStayPut) {
-  EXPECT_EQ(ParseFrameList("0-3"), (std::vector<size_t>{0, 1, 2, 3}));
-  EXPECT_EQ(ParseFrameList("3-1,7,0-0"), (std::vector<size_t>{3, 2, 1, 7, 0}));
+  EXPECT_EQ(ParseFrameList("0-3", 10), (std::vector<size_t>{0, 1, 2, 3}));
+  EXPECT_EQ(ParseFrameList("3-1,7,0-0", 10), (std::vector<size_t>{3, 2, 1, 7, 0}));
   for (const char* bad : {"", "1,", ",1", "1-", "a-3", "1-2-3", "-1", "1;2"}) {
-    EXPECT_THROW(ParseFrameList(bad), InvalidArgument) << bad;
+    EXPECT_THROW(ParseFrameList(bad, 10), InvalidArgument) << bad;
+  }
+  // Frames the source does not have, refused before a range is expanded (a billion frames would not fit).
+  for (const char* beyond : {"10", "0-10", "9-10", "0-1000000000000", "4,18446744073709551615"}) {
+    try {
+      ParseFrameList(beyond, 10);
+      ADD_FAILURE() << beyond;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("its frames are 0 to 9"), std::string::npos) << e.what();
+    }
   }
 }
 
@@ -137,6 +148,22 @@ TEST(WriteComposedSequence, LabelsAndDepthGoAlongAndABlackFrameHasNone) {
     EXPECT_NE(std::string(e.what()).find("000001.png"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("label image of frame 1 is missing"), std::string::npos) << e.what();
   }
+  // Nothing is left of a compose that failed half-way: a new folder is gone, an empty one empty again.
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+  std::filesystem::create_directories(dir / "empty");
+  EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({0, 1}), dir / "empty", false), InputError);
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "empty"));
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "empty"));
+}
+
+TEST(WriteComposedSequence, AnInterruptionStopsItAndLeavesNothing) {
+  testing::TempDir dir;
+  const auto source = OpenSequence(WriteLabelledSource(dir / "source"));
+  RequestInterrupt(SIGINT);
+  EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({0, 1, 2}), dir / "composed", false),
+               Interrupted);
+  ClearInterrupt();
+  EXPECT_FALSE(std::filesystem::exists(dir / "composed"));
 }
 
 }  // namespace

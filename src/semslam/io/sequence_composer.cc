@@ -9,6 +9,7 @@
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/io/image_folder.h"
 #include "semslam/io/trajectory_io.h"
@@ -17,11 +18,15 @@ namespace semslam {
 namespace fs = std::filesystem;
 namespace {
 
-size_t ParseFrame(std::string_view text, std::string_view part) {
+size_t ParseFrame(std::string_view text, std::string_view part, size_t frame_count) {
   size_t value = 0;
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
   Require(!text.empty() && ec == std::errc() && ptr == text.data() + text.size(),
           fmt::format("frame list: '{}' in '{}' is not a frame number or a range A-B", text, part));
+  Require(
+      value < frame_count,
+      fmt::format("frame list: the sequence has no frame {} (in '{}'; {})", value, part,
+                  frame_count == 0 ? "it has none" : fmt::format("its frames are 0 to {}", frame_count - 1)));
   return value;
 }
 
@@ -64,54 +69,9 @@ cv::Mat LoadFrameImage(const fs::path& dir, size_t frame, std::string_view what)
   return ReadImageUnchanged(path);
 }
 
-}  // namespace
-
-std::vector<size_t> ParseFrameList(std::string_view text) {
-  std::vector<size_t> frames;
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string_view part = text.substr(start, comma - start);
-    Require(!part.empty(), fmt::format("frame list '{}' has an empty part", text));
-    const size_t dash = part.find('-');
-    if (dash == std::string_view::npos) {
-      frames.push_back(ParseFrame(part, text));
-    } else {
-      const size_t a = ParseFrame(part.substr(0, dash), text), b = ParseFrame(part.substr(dash + 1), text);
-      if (a <= b) {
-        for (size_t f = a; f <= b; ++f) frames.push_back(f);
-      } else {
-        for (size_t f = a + 1; f-- > b;) frames.push_back(f);
-      }
-    }
-    start = comma + 1;
-  }
-  return frames;
-}
-
-std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size_t black_first,
-                                         size_t black_end) {
-  std::vector<ComposedFrame> composed;
-  for (size_t i = 0; i < frames.size(); ++i)
-    composed.push_back({frames[i], i >= black_first && i < black_end});
-  return composed;
-}
-
-void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
-                           const fs::path& out, bool stereo, bool show_progress) {
-  Require(!frames.empty(), "compose: no frames");
-  for (const ComposedFrame& f : frames) {
-    if (f.source_frame >= source.size()) {
-      const std::string range =
-          source.size() == 0 ? "it has none" : fmt::format("its frames are 0 to {}", source.size() - 1);
-      throw InputError(source.directory(),
-                       fmt::format("compose: the sequence has no frame {} ({})", f.source_frame, range));
-    }
-  }
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_empty(out, ec))
-    throw InputError(out, "compose: the output folder is not empty");
-  stereo = stereo && source.stereo().has_value();
+// WriteComposedSequence's writing, into a folder it has checked.
+void WriteComposedFrames(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
+                         const fs::path& out, bool stereo, bool show_progress) {
   fs::create_directories(out / "left");
   if (stereo) fs::create_directories(out / "right");
   // The synthetic city's per-frame labels and depth go along, so that a composed drive can be segmented
@@ -127,6 +87,12 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
   std::vector<Rigid3d> truth_out;
   ProgressReporter progress("compose", frames.size(), show_progress);
   for (size_t i = 0; i < frames.size(); ++i) {
+    if (InterruptRequested()) {
+      throw Interrupted(InterruptSignal(),
+                        fmt::format("compose: interrupted by {} after {} of {} frames; {} is "
+                                    "left as it was",
+                                    InterruptName(), i, frames.size(), out.string()));
+    }
     const ComposedFrame& f = frames[i];
     const std::string name = fmt::format("{:06d}.png", i);
     for (int camera = 0; camera < (stereo ? 2 : 1); ++camera) {
@@ -174,6 +140,68 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
     yaml.ground_truth = out / "gt.txt";
   }
   WriteCameraYaml(out / "camera.yaml", yaml);
+}
+
+}  // namespace
+
+std::vector<size_t> ParseFrameList(std::string_view text, size_t frame_count) {
+  std::vector<size_t> frames;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string_view part = text.substr(start, comma - start);
+    Require(!part.empty(), fmt::format("frame list '{}' has an empty part", text));
+    const size_t dash = part.find('-');
+    if (dash == std::string_view::npos) {
+      frames.push_back(ParseFrame(part, text, frame_count));
+    } else {
+      const size_t a = ParseFrame(part.substr(0, dash), text, frame_count),
+                   b = ParseFrame(part.substr(dash + 1), text, frame_count);
+      if (a <= b) {
+        for (size_t f = a; f <= b; ++f) frames.push_back(f);
+      } else {
+        for (size_t f = a + 1; f-- > b;) frames.push_back(f);
+      }
+    }
+    start = comma + 1;
+  }
+  return frames;
+}
+
+std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size_t black_first,
+                                         size_t black_end) {
+  std::vector<ComposedFrame> composed;
+  for (size_t i = 0; i < frames.size(); ++i)
+    composed.push_back({frames[i], i >= black_first && i < black_end});
+  return composed;
+}
+
+void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
+                           const fs::path& out, bool stereo, bool show_progress) {
+  Require(!frames.empty(), "compose: no frames");
+  for (const ComposedFrame& f : frames) {
+    if (f.source_frame >= source.size()) {
+      const std::string range =
+          source.size() == 0 ? "it has none" : fmt::format("its frames are 0 to {}", source.size() - 1);
+      throw InputError(source.directory(),
+                       fmt::format("compose: the sequence has no frame {} ({})", f.source_frame, range));
+    }
+  }
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_empty(out, ec))
+    throw InputError(out, "compose: the output folder is not empty");
+  // The folder was new or empty: a compose that does not finish leaves it so.
+  const bool created = !fs::exists(out, ec);
+  try {
+    WriteComposedFrames(source, frames, out, stereo && source.stereo().has_value(), show_progress);
+  } catch (...) {
+    if (created) {
+      fs::remove_all(out, ec);
+    } else {
+      for (const auto& entry : fs::directory_iterator(out, ec)) fs::remove_all(entry.path(), ec);
+    }
+    throw;
+  }
 }
 
 }  // namespace semslam

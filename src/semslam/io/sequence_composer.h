@@ -22,8 +22,9 @@ struct ComposedFrame {
 };
 
 // Parses a frame list: comma-separated ranges "A-B" (inclusive; A > B runs backwards) or single frames,
-// e.g. "0-159,158-0,1-159". Throws InvalidArgument naming the bad part.
-std::vector<size_t> ParseFrameList(std::string_view text);
+// e.g. "0-159,158-0,1-159", of a source with `frame_count` frames. Throws InvalidArgument naming the bad
+// part, or a frame the source does not have (before a range is expanded).
+std::vector<size_t> ParseFrameList(std::string_view text, size_t frame_count);
 
 // The composed frames: `frames` in order, with those at composed positions [black_first, black_end)
 // black.
@@ -33,9 +34,10 @@ std::vector<ComposedFrame> ComposeFrames(const std::vector<size_t>& frames, size
 // Writes the composed sequence into `out` (created; it must be empty or missing): images (left, and right
 // when `stereo` and the source has a second camera), times.txt (at the source's frame rate; a jump over k
 // source frames takes k intervals), gt.txt (KITTI poses in the source's frame, when the source has a
-// ground truth), labels and depth (when the source has them; a black frame's labels are 255, "ignore", and its
-// depth 0) and camera.yaml. Throws InputError for frames the source does not have, or whose label or depth
-// image is missing.
+// ground truth), labels and depth (when the source has them; a black frame's labels are 255, "ignore", and
+// its depth 0) and camera.yaml. Throws InputError for frames the source does not have, or whose label or
+// depth image is missing, and Interrupted at Ctrl-C (core/interrupt.h); a compose that does not finish leaves
+// `out` as it found it.
 void WriteComposedSequence(const ImageSequence& source, const std::vector<ComposedFrame>& frames,
                            const std::filesystem::path& out, bool stereo, bool show_progress = false);
 
