@@ -13,12 +13,16 @@ LogFile::LogFile(const std::filesystem::path& path, const std::vector<std::strin
   sink->set_pattern("%Y-%m-%d %H:%M:%S.%e [%l] %v");
   spdlog::default_logger()->sinks().push_back(sink);
   sink_ = sink;
+  // Each message reaches the file as it is logged: the log of a process that is killed is the one needed.
+  previous_flush_level_ = static_cast<int>(spdlog::default_logger()->flush_level());
+  spdlog::default_logger()->flush_on(spdlog::level::trace);
   for (const std::string& line : header) spdlog::info("{}", line);
 }
 
 LogFile::~LogFile() {
   auto logger = spdlog::default_logger();
   logger->flush();
+  logger->flush_on(static_cast<spdlog::level::level_enum>(previous_flush_level_));
   auto& sinks = logger->sinks();
   sinks.erase(std::remove_if(sinks.begin(), sinks.end(),
                              [&](const spdlog::sink_ptr& s) { return static_cast<void*>(s.get()) == sink_.get(); }),

@@ -9,7 +9,8 @@
 namespace semslam {
 
 // Copies every log message the default logger passes (debug and up when it is at debug level, else info and
-// up) to `path`, with the date, after `header` lines (e.g. the version and the command line).
+// up) to `path`, with the date, after `header` lines (e.g. the version and the command line). Each message
+// is flushed as it is written, so a process that is killed leaves its log whole.
 class LogFile {
  public:
   explicit LogFile(const std::filesystem::path& path, const std::vector<std::string>& header = {});
@@ -19,6 +20,7 @@ class LogFile {
 
  private:
   std::shared_ptr<void> sink_;
+  int previous_flush_level_ = 0;
 };
 
 }  // namespace semslam
