@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/core/text_reader.h"
 #include "semslam/core/timing.h"
@@ -42,6 +43,14 @@ struct TrainArgs {
   bool opencv_pattern = false;
 };
 
+// Ctrl-C: the long steps (feature extraction, training) end at the next progress report; nothing is written.
+void StopIfInterrupted(const char* command) {
+  if (InterruptRequested()) {
+    throw Interrupted(InterruptSignal(),
+                      fmt::format("{}: interrupted by {}; nothing written", command, InterruptName()));
+  }
+}
+
 void Train(const TrainArgs& args) {
   Stopwatch watch;
   if (args.image_dirs.empty() == (args.procedural == 0)) {
@@ -56,14 +65,20 @@ void Train(const TrainArgs& args) {
     std::fprintf(stderr, "vocab train: %zu procedural images, %d features each\n", args.procedural, args.features);
     ProgressReporter progress("extracting features", args.procedural);
     descriptors = ExtractProceduralDescriptors(args.procedural, cv::Size(1241, 376), orb, args.seed,
-                                               [&](size_t done, size_t) { progress.Update(done); });
+                                               [&](size_t done, size_t) {
+                                                 StopIfInterrupted("vocab train");
+                                                 progress.Update(done);
+                                               });
     progress.Finish();
   } else {
     std::vector<std::filesystem::path> folders(args.image_dirs.begin(), args.image_dirs.end());
     const auto images = ListTrainingImages(folders, args.max_images);
     std::fprintf(stderr, "vocab train: %zu images, %d features each\n", images.size(), args.features);
     ProgressReporter progress("extracting features", images.size());
-    descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+    descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) {
+      StopIfInterrupted("vocab train");
+      progress.Update(done);
+    });
     progress.Finish();
   }
   VocabularyTrainingOptions options;
@@ -72,8 +87,11 @@ void Train(const TrainArgs& args) {
   options.max_iterations = args.iterations;
   options.seed = args.seed;
   options.pattern = orb.pattern;
-  const Vocabulary vocabulary = Vocabulary::Train(
-      descriptors, options, [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+  const Vocabulary vocabulary = Vocabulary::Train(descriptors, options, [](const std::string& line) {
+    StopIfInterrupted("vocab train");
+    std::fprintf(stderr, "%s\n", line.c_str());
+  });
+  StopIfInterrupted("vocab train");
   vocabulary.Save(args.out);
   PrintSummary(vocabulary, args.out);
   std::fprintf(stderr, "vocab train: done in %.1f s\n", watch.ElapsedSeconds());
@@ -124,8 +142,10 @@ void Eval(const EvalArgs& args) {
   orb.num_features = args.features;
   orb.pattern = vocabulary.descriptor_pattern();
   ProgressReporter progress("extracting features", images.size());
-  const auto descriptors =
-      ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) { progress.Update(done); });
+  const auto descriptors = ExtractTrainingDescriptors(images, orb, [&](size_t done, size_t) {
+    StopIfInterrupted("vocab eval");
+    progress.Update(done);
+  });
   progress.Finish();
   const RetrievalResult r = EvaluateRetrieval(vocabulary, descriptors, centres, directions, args.retrieval);
   std::printf(
