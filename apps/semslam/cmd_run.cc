@@ -134,7 +134,14 @@ void AddRunCommand(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_flag("--no-loop-closing", args->no_loop_closing, "Disable loop closing");
   cmd->add_flag("-q,--quiet", args->quiet, "Only errors on stderr (no log messages, no progress lines)");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    if (args->gps.empty()) {
+      for (const char* flag : {"--gps-every", "--gps-lever-arm", "--no-gps-fusion"}) {
+        if (cmd->count(flag) > 0) spdlog::warn("{} has no effect without --gps", flag);
+      }
+    }
+    Run(*args);
+  });
 }
 
 }  // namespace semslam::cli

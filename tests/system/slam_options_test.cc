@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "semslam/core/error.h"
+#include "semslam/system/sequence_runner.h"
 #include "semslam/system/slam_config.h"
 #include "semslam/system/slam_system.h"
 #include "support/test_support.h"
@@ -49,6 +50,29 @@ TEST(SlamOptions, RealtimeWaitForMappingIsBounded) {
   }
   options.realtime_wait_for_mapping_frames = 0.0;  // never wait
   EXPECT_NO_THROW(options.Check());
+}
+
+// Options that mean nothing without another are refused, not silently ignored.
+TEST(RunOptions, FlagsThatNeedAnotherAreRefused) {
+  RunOptions options;
+  options.sequence = "seq";
+  options.output = "out";
+  EXPECT_NO_THROW(options.Check());
+  options.slam.localization_only = true;
+  try {
+    options.Check();
+    ADD_FAILURE() << "--localization-only without a map was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("--map-in"), std::string::npos) << e.what();
+  }
+  options.map_in = "map.semslam";
+  EXPECT_NO_THROW(options.Check());
+  options.slam.exclude_dynamic = true;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  options.segmenter = "truth-noisy:0.1";
+  EXPECT_NO_THROW(options.Check());
+  options.slam.tracker.min_frames_between_keyframes = 11;
+  EXPECT_THROW(options.Check(), InvalidArgument);
 }
 
 }  // namespace

@@ -40,6 +40,10 @@ void RunOptions::Check() const {
   Require(!output.empty(), "run: --out is required");
   Require(first_frame < end_frame, "run: the frame range is empty");
   Require(gps_every >= 1, "run: --gps-every must be at least 1 frame");
+  Require(!slam.localization_only || !map_in.empty(),
+          "run: --localization-only needs --map-in (the map to track against without changing it)");
+  Require(!slam.exclude_dynamic || (segmenter != "none" && !segmenter.empty()),
+          "run: --exclude-dynamic needs a --segmenter (it keeps points out by their labels)");
   // Paths are recorded in run.json and the report (UTF-8): refused now rather than after the last frame.
   RequireUtf8Argument(sequence, "--sequence");
   RequireUtf8Argument(output, "--out");

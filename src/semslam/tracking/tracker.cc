@@ -30,6 +30,8 @@ void TrackerOptions::Check() const {
           "tracker: init_level_share_exponent must be in [0, 4]");
   Require(max_frames_between_keyframes >= 1, "tracker: max_frames_between_keyframes must be >= 1");
   Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
+  Require(min_frames_between_keyframes <= max_frames_between_keyframes,
+          "tracker: min_frames_between_keyframes must not exceed max_frames_between_keyframes");
   Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
   Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 &&
               keyframe_tracked_ratio_stereo > 0 && keyframe_tracked_ratio_stereo <= 1,
