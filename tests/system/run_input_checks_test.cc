@@ -3,7 +3,11 @@
 #include "semslam/system/run_input_checks.h"
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
+#include <memory>
+#include <sstream>
 #include <string>
 
 namespace semslam {
@@ -37,6 +41,30 @@ TEST(RunInputChecks, AGpsLogWithoutUsableFixesIsRefused) {
   }
   log.fixes.push_back(Fix(0.0, 48.1, 11.5));
   EXPECT_NO_THROW(CheckGpsLog(log, {0.0, 0.1}));
+}
+
+// The warnings CheckGpsLog gives for `frame_times`.
+std::string GpsWarnings(const GpsLog& log, const std::vector<double>& frame_times) {
+  std::ostringstream text;
+  auto sink = std::make_shared<spdlog::sinks::ostream_sink_st>(text);
+  spdlog::default_logger()->sinks().push_back(sink);
+  CheckGpsLog(log, frame_times);
+  spdlog::default_logger()->sinks().pop_back();
+  return text.str();
+}
+
+TEST(RunInputChecks, ClockTimesThatDoNotOverlapAreWarnedAbout) {
+  GpsLog log;
+  log.source = "oxts";
+  const double start = 1317384000.0;  // a KITTI raw drive's clock
+  for (int i = 0; i < 10; ++i) log.fixes.push_back(Fix(start + i, 48.1, 11.5));
+  EXPECT_EQ(GpsWarnings(log, {start + 2, start + 3}), "");
+  // Times from 0 (KITTI odometry): the log's clock is another base, not another recording.
+  EXPECT_EQ(GpsWarnings(log, {0.0, 1.0}), "");
+  // Both clocks, 126 s apart: another drive's log.
+  const std::string warning = GpsWarnings(log, {start + 126, start + 127});
+  EXPECT_NE(warning.find("Is the log of this recording?"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("offset -126.000 s"), std::string::npos) << warning;
 }
 
 TEST(RunInputChecks, DistancesAreGreatCircles) {

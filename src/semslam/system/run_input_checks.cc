@@ -37,6 +37,15 @@ void CheckGpsLog(const GpsLog& log, const std::vector<double>& frame_times) {
   const bool overlap = std::any_of(frame_times.begin(), frame_times.end(), [&](double t) {
     return t + offset >= begin - slack && t + offset <= end + slack;
   });
+  // Clock times on both sides (after 1973) that do not overlap: the guess that they start together is
+  // likely wrong (a log of another recording, or of another day).
+  constexpr double kClockTime = 1e8;
+  if (offset != 0.0 && begin > kClockTime && frame_times.front() > kClockTime) {
+    spdlog::warn(
+        "{}: the GPS fixes ({:.3f}..{:.3f} s) and the frames ({:.3f}..{:.3f} s) are both clock times but do "
+        "not overlap; assumed to start together (offset {:.3f} s). Is the log of this recording?",
+        log.source.string(), begin, end, frame_times.front(), frame_times.back(), offset);
+  }
   if (!overlap) {
     spdlog::warn(
         "{}: the GPS fixes ({:.3f}..{:.3f} s) do not overlap the frames ({:.3f}..{:.3f} s, offset "

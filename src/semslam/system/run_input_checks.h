@@ -17,7 +17,8 @@ namespace semslam {
 void RequireUtf8Argument(const std::filesystem::path& path, std::string_view what);
 
 // Throws InputError naming the log when it holds no usable fix (every line was skipped, or none was there).
-// Warns when no fix lies within the frames' time range (after GuessTimeOffset), so none can be used.
+// Warns when no fix lies within the frames' time range (after GuessTimeOffset), so none can be used, and
+// when both are clock times that do not overlap (GuessTimeOffset then assumes they start together).
 void CheckGpsLog(const GpsLog& log, const std::vector<double>& frame_times);
 
 // Warns about landmarks more than far_m from every GPS fix (a catalogue of another town, swapped latitude and
