@@ -33,6 +33,31 @@ TEST(PinholeCamera, DistortionRoundTrip) {
   EXPECT_TRUE(c.UnprojectDepth(uv, 8.0).isApprox(p, 1e-9));
 }
 
+TEST(PinholeCamera, DistortionThatFoldsTheImageIsFound) {
+  PinholeCamera c = KittiCamera();
+  EXPECT_FALSE(c.PixelNotUndistorted().has_value());
+  // KITTI raw's unrectified grey camera (2011_09_26 calib_cam_to_cam.txt, camera 00): strong barrel
+  // distortion, still one to one over its image.
+  PinholeCamera raw;
+  raw.width = 1392;
+  raw.height = 512;
+  raw.fx = 984.2439;
+  raw.fy = 980.8141;
+  raw.cx = 690.0;
+  raw.cy = 233.1966;
+  raw.distortion = {-0.3728755, 0.2037299, 0.002219027, 0.001383707, -0.07233722};
+  EXPECT_FALSE(raw.PixelNotUndistorted().has_value());
+  // The same lens on the rectified camera's shorter focal length: its corners fold back.
+  c.distortion = raw.distortion;
+  EXPECT_TRUE(c.PixelNotUndistorted().has_value());
+  // Coefficients of another lens or mistyped: the corners fold back (r_d(r) turns) or do not converge.
+  for (const Distortion& d : {Distortion{-0.9, 0, 0, 0, 0}, Distortion{0, 3.0, 0, 0, 0},
+                              Distortion{-2.0, 0, 0, 0, 0}, Distortion{0, 0, 0.5, 0, 0}}) {
+    c.distortion = d;
+    EXPECT_TRUE(c.PixelNotUndistorted().has_value()) << d.k1 << " " << d.k2 << " " << d.p1;
+  }
+}
+
 TEST(PinholeCamera, VisibilityChecksDepthAndBounds) {
   const PinholeCamera c = KittiCamera();
   EXPECT_TRUE(c.ProjectIfVisible({0, 0, 5}).has_value());

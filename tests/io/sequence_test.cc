@@ -396,6 +396,10 @@ TEST(ImageFolderSequence, MalformedCameraFilesNameFileLineAndKey) {
   EXPECT_INPUT_ERROR(ReadCameraYaml(yaml), "camera.yaml", "mapping");
   WriteText(yaml, "fx: 30\nfy: 30\ncx: 20\ncy: 10\ntimes: missing.txt\n");
   EXPECT_INPUT_ERROR(OpenSequence(dir.path()), "missing.txt", "not found");
+  // Distortion that folds the image's corners back: the file and the coefficients, not an internal error.
+  WriteText(yaml, "fx: 30\nfy: 30\ncx: 20\ncy: 10\nk1: -0.9\n");
+  EXPECT_INPUT_ERROR(OpenSequence(dir.path()), "camera.yaml", "'k1, k2, p1, p2, k3'",
+                     "does not map the 40x20");
 }
 
 }  // namespace

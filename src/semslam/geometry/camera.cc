@@ -1,8 +1,11 @@
 #include "semslam/geometry/camera.h"
 
-#include <cmath>
-
 #include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <utility>
 
 #include "semslam/core/error.h"
 
@@ -59,6 +62,32 @@ Eigen::Vector2d PinholeCamera::PixelToNormalized(const Eigen::Vector2d& pixel) c
     if (error.squaredNorm() < 1e-24) break;
   }
   return n;
+}
+
+std::optional<Eigen::Vector2d> PinholeCamera::PixelNotUndistorted() const {
+  if (distortion.IsZero()) return std::nullopt;
+  constexpr int kSteps = 32;
+  constexpr double kTolerancePx = 0.1;
+  const double w = width - 1.0, h = height - 1.0;
+  // The four sides, each walked in the direction its undistorted coordinate must grow.
+  const std::array<std::pair<Eigen::Vector2d, Eigen::Vector2d>, 4> sides = {
+      std::pair{Eigen::Vector2d(0, 0), Eigen::Vector2d(w, 0)},
+      {Eigen::Vector2d(0, h), Eigen::Vector2d(w, h)},
+      {Eigen::Vector2d(0, 0), Eigen::Vector2d(0, h)},
+      {Eigen::Vector2d(w, 0), Eigen::Vector2d(w, h)}};
+  for (size_t side = 0; side < sides.size(); ++side) {
+    const int axis = side < 2 ? 0 : 1;
+    double previous = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i <= kSteps; ++i) {
+      const Eigen::Vector2d pixel =
+          sides[side].first + (sides[side].second - sides[side].first) * (static_cast<double>(i) / kSteps);
+      const Eigen::Vector2d n = PixelToNormalized(pixel);
+      if (!n.allFinite() || (Project(n.homogeneous()) - pixel).norm() > kTolerancePx || !(n[axis] > previous))
+        return pixel;
+      previous = n[axis];
+    }
+  }
+  return std::nullopt;
 }
 
 Eigen::Vector3d PinholeCamera::Unproject(const Eigen::Vector2d& pixel) const {

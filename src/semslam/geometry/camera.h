@@ -32,6 +32,10 @@ struct PinholeCamera {
   Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& pixel) const;
   // Bearing (unit length) of a pixel.
   Eigen::Vector3d Unproject(const Eigen::Vector2d& pixel) const;
+  // A pixel on the image's border that the distortion does not map one to one (PixelToNormalized then
+  // Project misses it by more than 0.1 px, or it undistorts out of order with its neighbours along the
+  // border); nullopt when the model is usable over the whole image.
+  std::optional<Eigen::Vector2d> PixelNotUndistorted() const;
   // The point at `depth` along the pixel's ray (depth = z in the camera frame).
   Eigen::Vector3d UnprojectDepth(const Eigen::Vector2d& pixel, double depth) const {
     const Eigen::Vector2d n = PixelToNormalized(pixel);

@@ -134,6 +134,15 @@ void CheckCameraPlausible(const PinholeCamera& camera, const fs::path& calibrati
                      fmt::format("principal point ({:.6g}, {:.6g}) px lies far outside the {}x{} image",
                                  camera.cx, camera.cy, camera.width, camera.height));
   }
+  if (const std::optional<Eigen::Vector2d> pixel = camera.PixelNotUndistorted()) {
+    const Distortion& d = camera.distortion;
+    throw InputError(
+        SourceLocation{calibration, 0}, "k1, k2, p1, p2, k3",
+        fmt::format(
+            "the distortion ({:.6g}, {:.6g}, {:.6g}, {:.6g}, {:.6g}) does not map the {}x{} image one to "
+            "one (pixel ({:.0f}, {:.0f}) cannot be undistorted): are these this camera's coefficients?",
+            d.k1, d.k2, d.p1, d.p2, d.k3, camera.width, camera.height, pixel->x(), pixel->y()));
+  }
 }
 
 fs::path NormalizeDirectory(const fs::path& path) {
