@@ -374,6 +374,18 @@ TEST(ImageFolderSequence, ImagesBesideTheYamlWithFpsAndDistortion) {
   EXPECT_DOUBLE_EQ(OpenSequence(dir.path())->Timestamp(2), 0.2);  // 10 Hz by default
 }
 
+TEST(ImageFolderSequence, AFirstImageOfAnotherSizeThanTheRestIsRefused) {
+  testing::TempDir dir;
+  WritePng(dir / "0000.png", Pattern(51, 37, 0));
+  for (int i = 1; i < 4; ++i) WritePng(dir / fmt::format("{:04d}.png", i), Pattern(40, 20, i));
+  WriteText(dir / "camera.yaml", "fx: 30\nfy: 30\ncx: 20\ncy: 10\n");
+  EXPECT_INPUT_ERROR(OpenSequence(dir.path()), "0000.png", "51x37", "0001.png and 0003.png", "40x20");
+  // One odd frame later on is a bad frame of the run, not a bad sequence.
+  WritePng(dir / "0000.png", Pattern(40, 20, 0));
+  WritePng(dir / "0003.png", Pattern(51, 37, 3));
+  EXPECT_EQ(OpenSequence(dir.path())->camera().width, 40);
+}
+
 TEST(ImageFolderSequence, MalformedCameraFilesNameFileLineAndKey) {
   testing::TempDir dir;
   WritePng(dir / "0.png", Pattern(40, 20, 0));

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <system_error>
 
@@ -98,6 +99,26 @@ std::unique_ptr<ImageSequence> MakeFileSequence(SequenceFiles files) {
     throw InputError(files.left.front(),
                      fmt::format("image is {}x{} but the calibration says {}x{}", first.cols, first.rows,
                                  files.camera.width, files.camera.height));
+  }
+  if (files.camera.width == 0 && files.left.size() >= 3) {
+    // The first image sets the size every frame must have: one of another size than the rest would make
+    // every other frame "bad". Two others (the second and the last) that agree outvote it.
+    const auto size_of = [](const fs::path& file) -> std::optional<cv::Size> {
+      try {
+        return ReadImage(file).size();
+      } catch (const InputError&) {
+        return std::nullopt;  // a bad frame, skipped when it is read
+      }
+    };
+    const std::optional<cv::Size> second = size_of(files.left[1]), last = size_of(files.left.back());
+    if (second && last && *second == *last && *second != first.size()) {
+      throw InputError(
+          files.left.front(),
+          fmt::format("image is {}x{} but the sequence's others ({} and {}) are {}x{}: is it this "
+                      "sequence's first image?",
+                      first.cols, first.rows, files.left[1].filename().string(),
+                      files.left.back().filename().string(), second->width, second->height));
+    }
   }
   files.camera.width = first.cols;
   files.camera.height = first.rows;
