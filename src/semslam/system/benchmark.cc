@@ -5,12 +5,15 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/text_reader.h"
 #include "semslam/core/timing.h"
 #include "semslam/system/run_metadata.h"
@@ -33,9 +36,20 @@ void RunProcess(const std::vector<std::string>& argv) {
     throw std::runtime_error(fmt::format("cannot start {}", argv[0]));
   }
   int status = 0;
-  waitpid(pid, &status, 0);
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  // Ctrl-C reaches the whole process group: the run saved what it did and stopped, and so does the bench.
+  if (InterruptRequested()) {
+    throw Interrupted(InterruptSignal(), fmt::format("bench: interrupted by {} during `{}`", InterruptName(),
+                                                     fmt::join(argv, " ")));
+  }
+  if (WIFSIGNALED(status)) {
+    throw std::runtime_error(fmt::format("`{}` was killed by signal {} ({})", fmt::join(argv, " "),
+                                         WTERMSIG(status), strsignal(WTERMSIG(status))));
+  }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw std::runtime_error(fmt::format("`{}` failed (status {})", fmt::join(argv, " "), status));
+    throw std::runtime_error(
+        fmt::format("`{}` failed with exit code {}", fmt::join(argv, " "), WEXITSTATUS(status)));
   }
 }
 
