@@ -83,11 +83,16 @@ DemoSummary RunDemo(const DemoOptions& options) {
   const nlohmann::json run_json = ReadJsonFile(run.output / "run.json");
   summary.path_length_m = run_json.value("path_length_m", 0.0);
 
-  // A route between the first and the last landmark of the topological map.
+  // A route between the first and the last landmark of the topological map that the drive passed (a short
+  // drive leaves some too far from its trajectory for a node).
   nlohmann::json route_json = nullptr;
   if (std::filesystem::exists(run.output / "topology.json")) {
     const TopologicalMap topology = ReadTopologyJson(run.output / "topology.json");
-    const std::vector<std::string> names = topology.LandmarkNames();
+    std::vector<std::string> names;
+    for (const TopoLandmark& landmark : topology.landmarks) {
+      if (landmark.node >= 0) names.push_back(landmark.name);
+    }
+    if (names.size() < 2) spdlog::info("demo: fewer than two landmarks along the drive, no route");
     if (names.size() >= 2) {
       const Route route = FindRoute(topology, names.front(), names.back());
       WriteRouteGeoJson(options.output / "route.geojson", topology, route);
