@@ -19,9 +19,11 @@
 #include <sstream>
 #include <thread>
 
+#include "semslam/core/interrupt.h"
 #include "semslam/geometry/trajectory.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
+#include "semslam/system/localizer.h"
 #include "support/test_support.h"
 #include "system_test_util.h"
 
@@ -208,6 +210,20 @@ TEST(Interruption, SigintSavesTheFramesDoneAndAMapThatLocalizeLoads) {
       RunSemslam({"localize", "--map", (out / "map.semslam").string(), "--sequence", SequenceDir(data).string(),
                   "--out", (dir / "localize").string(), "--frames", "0:10", "-q"});
   EXPECT_TRUE(localize.Succeeded()) << localize.Describe();
+
+  // A localization stopped before its first frame reports the frames it read, not those it was asked for.
+  LocalizeOptions stopped;
+  stopped.map = out / "map.semslam";
+  stopped.sequence = SequenceDir(data);
+  stopped.output = dir / "localize_stopped";
+  stopped.end_frame = 10;
+  stopped.show_progress = false;
+  RequestInterrupt(SIGINT);
+  EXPECT_THROW(LocalizeSequence(stopped), Interrupted);
+  ClearInterrupt();
+  const nlohmann::json stopped_json = ReadJson(dir / "localize_stopped" / "localize.json");
+  EXPECT_EQ(stopped_json.value("status", ""), "interrupted");
+  EXPECT_EQ(stopped_json.value("frames", size_t{99}), 0u);
 }
 
 TEST(Interruption, ASecondSignalQuitsAtOnceAndTheNextRunCleansUp) {

@@ -271,7 +271,7 @@ LocalizeSummary LocalizeSequence(const LocalizeOptions& options) {
   }
 
   LocalizeSummary summary;
-  summary.frames = end - first;
+  summary.frames = frames_run;  // fewer than asked for when interrupted or stopped by bad frames
   summary.localized = localized.size();
   summary.relocalizations = stats.relocalizations;
   for (const auto& [map_id, n] : per_map_in_world) summary.in_world += n;
