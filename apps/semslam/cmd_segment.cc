@@ -1,9 +1,12 @@
 // semslam segment: run a segmenter on images, write colourized labels, print JSON (class histogram; pixel
 // accuracy and mIoU against ground truth when given).
 
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -16,6 +19,7 @@
 #include "commands.h"
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
+#include "semslam/core/interrupt.h"
 #include "semslam/core/progress.h"
 #include "semslam/core/timing.h"
 #include "semslam/semantics/class_table.h"
@@ -150,47 +154,71 @@ void RunSegment(const SegmentArgs& args) {
   std::vector<double> ms;
   nlohmann::json per_image = nlohmann::json::array();
   ProgressReporter progress("segment", images.size());
-  for (size_t i = 0; i < images.size(); ++i) {
-    const fs::path& path = images[i];
-    const cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-    if (image.empty()) throw InputError(path, "cannot decode the image");
-    const Stopwatch watch;
-    const Segmentation segmentation =
-        segmenter->Segment(image, FrameIndexOf(path, static_cast<std::int64_t>(i)));
-    const double elapsed = watch.ElapsedMs();
-    ms.push_back(elapsed);
-    const cv::Mat labels = segmentation.LabelsAtInputSize();
-    const ClassCounts counts = CountLabels(labels);
-    for (size_t c = 0; c < counts.size(); ++c) histogram[c] += counts[c];
-    nlohmann::json entry = {{"image", path.string()}, {"ms", elapsed}};
+  // What this command wrote, removed again when it fails half-way: no label images without segment.json.
+  std::vector<fs::path> written;
+  try {
+    for (size_t i = 0; i < images.size(); ++i) {
+      const fs::path& path = images[i];
+      const cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
+      if (image.empty()) throw InputError(path, "cannot decode the image");
+      const Stopwatch watch;
+      const Segmentation segmentation =
+          segmenter->Segment(image, FrameIndexOf(path, static_cast<std::int64_t>(i)));
+      const double elapsed = watch.ElapsedMs();
+      ms.push_back(elapsed);
+      const cv::Mat labels = segmentation.LabelsAtInputSize();
+      const ClassCounts counts = CountLabels(labels);
+      for (size_t c = 0; c < counts.size(); ++c) histogram[c] += counts[c];
+      nlohmann::json entry = {{"image", path.string()}, {"ms", elapsed}};
 
-    if (truth_dir || !truth_files.empty()) {
-      const fs::path truth_path = truth_dir ? FindTruth(*truth_dir, path, truth_label_ids) : truth_files[i];
-      cv::Mat truth = ReadLabelImage(truth_path);
-      if (truth_label_ids) truth = LabelIdsToTrainIds(truth);
-      cv::Mat predicted = labels;
-      if (predicted.size() != truth.size()) {
-        cv::resize(labels, predicted, truth.size(), 0, 0, cv::INTER_NEAREST);
+      if (truth_dir || !truth_files.empty()) {
+        const fs::path truth_path = truth_dir ? FindTruth(*truth_dir, path, truth_label_ids) : truth_files[i];
+        cv::Mat truth = ReadLabelImage(truth_path);
+        if (truth_label_ids) truth = LabelIdsToTrainIds(truth);
+        cv::Mat predicted = labels;
+        // A label image of another shape is another image's: scaling it would score the wrong pixels.
+        const double aspect = static_cast<double>(labels.cols) / labels.rows,
+                     truth_aspect = static_cast<double>(truth.cols) / truth.rows;
+        if (std::abs(aspect / truth_aspect - 1.0) > 0.02) {
+          throw InputError(truth_path,
+                           fmt::format("the ground truth is {}x{} but {} is {}x{}: another shape", truth.cols,
+                                       truth.rows, path.string(), labels.cols, labels.rows));
+        }
+        if (predicted.size() != truth.size()) {
+          cv::resize(labels, predicted, truth.size(), 0, 0, cv::INTER_NEAREST);
+        }
+        SegmentationScore score;
+        score.Add(predicted, truth);
+        total_score.Add(predicted, truth);
+        entry["truth"] = truth_path.string();
+        entry["pixel_accuracy"] = score.PixelAccuracy();
+        entry["mean_iou"] = score.MeanIou();
+        entry["mean_iou_truth_classes"] = score.MeanIouOverTruthClasses();
       }
-      SegmentationScore score;
-      score.Add(predicted, truth);
-      total_score.Add(predicted, truth);
-      entry["truth"] = truth_path.string();
-      entry["pixel_accuracy"] = score.PixelAccuracy();
-      entry["mean_iou"] = score.MeanIou();
-      entry["mean_iou_truth_classes"] = score.MeanIouOverTruthClasses();
+      if (!args.out.empty()) {
+        const std::string stem = path.stem().string();
+        const fs::path color_path = out_dir / (stem + "_labels.png");
+        WriteFileAtomically(color_path,
+                            EncodePng(ColorizeLabels(labels, args.overlay ? image : cv::Mat()), color_path));
+        written.push_back(color_path);
+        const fs::path ids_path = out_dir / (stem + "_trainids.png");
+        WriteFileAtomically(ids_path, EncodePng(labels, ids_path));
+        written.push_back(ids_path);
+        entry["labels_png"] = color_path.string();
+      }
+      per_image.push_back(std::move(entry));
+      if (i + 1 < images.size()) progress.Update(i + 1);
+      if (InterruptRequested() && i + 1 < images.size()) {
+        throw Interrupted(InterruptSignal(),
+                          fmt::format("segment: interrupted by {} after {} of {} images; nothing "
+                                      "kept",
+                                      InterruptName(), i + 1, images.size()));
+      }
     }
-    if (!args.out.empty()) {
-      const std::string stem = path.stem().string();
-      const fs::path color_path = out_dir / (stem + "_labels.png");
-      WriteFileAtomically(color_path,
-                          EncodePng(ColorizeLabels(labels, args.overlay ? image : cv::Mat()), color_path));
-      const fs::path ids_path = out_dir / (stem + "_trainids.png");
-      WriteFileAtomically(ids_path, EncodePng(labels, ids_path));
-      entry["labels_png"] = color_path.string();
-    }
-    per_image.push_back(std::move(entry));
-    if (i + 1 < images.size()) progress.Update(i + 1);
+  } catch (...) {
+    std::error_code ec;
+    for (const fs::path& file : written) fs::remove(file, ec);
+    throw;
   }
   progress.Finish();
 

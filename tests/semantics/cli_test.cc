@@ -55,6 +55,18 @@ TEST_F(SegmentCommand, ScoresTruthNoisyAgainstTheTruth) {
       RunSemslam({"segment", "--segmenter", "truth-noisy:0", "--images", (dir / "image_0").string()});
   ASSERT_EQ(sibling.exit_code, 0);
   EXPECT_NEAR(nlohmann::json::parse(sibling.out)["class_histogram"]["sky"].get<double>(), 0.4, 1e-9);
+
+  // A truth of another shape (another image's) is refused, and the images done before it are not kept.
+  std::filesystem::copy(dir / "label_0", dir / "other");
+  ASSERT_TRUE(
+      cv::imwrite((dir / "other" / "000002.png").string(), cv::Mat(100, 100, CV_8UC1, cv::Scalar(0))));
+  const CommandResult shape =
+      RunSemslam({"segment", "--segmenter", "truth-noisy:0", "--images", (dir / "image_0").string(),
+                  "--truth", (dir / "other").string(), "--out", (dir / "out2").string()});
+  EXPECT_NE(shape.exit_code, 0);
+  EXPECT_NE(shape.err.find("000002.png"), std::string::npos) << shape.err;
+  EXPECT_NE(shape.err.find("another shape"), std::string::npos) << shape.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out2" / "000000_labels.png"));
 }
 
 TEST_F(SegmentCommand, OnnxCardAndErrors) {
