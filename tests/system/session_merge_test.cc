@@ -188,6 +188,17 @@ TEST(SessionMerge, AFolderWithoutAMapIsNamed) {
   EXPECT_FALSE(r.Succeeded());
   EXPECT_NE(r.err.find((dir / "not_a_run" / "map.semslam").string()), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "merged" / "run.json"));
+  // One drive twice (once through a detour) is refused, and so is an output folder that is an input.
+  const CommandResult twice = RunSemslam(
+      {"merge", "--maps", mono.dir.string(), (mono.dir / ".").string(), "--out", (dir / "merged").string()});
+  EXPECT_FALSE(twice.Succeeded());
+  EXPECT_NE(twice.err.find("twice"), std::string::npos) << twice.err;
+  fs::copy(mono.dir, dir / "copy", fs::copy_options::recursive);
+  const CommandResult into = RunSemslam({"merge", "--maps", mono.dir.string(), (dir / "copy").string(),
+                                         "--out", (dir / "copy").string(), "--overwrite"});
+  EXPECT_FALSE(into.Succeeded());
+  EXPECT_NE(into.err.find("which this merge reads"), std::string::npos) << into.err;
+  EXPECT_TRUE(fs::exists(dir / "copy" / "map.semslam"));
 }
 
 }  // namespace

@@ -46,6 +46,13 @@ void SessionMergeOptions::Check() const {
   Require(global_ba_iterations > 0, "merge: global_ba_iterations must be positive");
   Require(global_ba_refine_iterations > 0, "merge: global_ba_refine_iterations must be positive");
   Require(global_ba_window_keyframes >= 2, "merge: global_ba_window_keyframes must be >= 2");
+  // One drive given twice would be two sessions of the same frames, each the other's perfect loop.
+  std::set<std::filesystem::path> seen;
+  for (const std::filesystem::path& run : runs) {
+    std::error_code ec;
+    const std::filesystem::path key = std::filesystem::weakly_canonical(run, ec);
+    Require(seen.insert(ec ? run : key).second, fmt::format("merge: --maps names {} twice", run.string()));
+  }
 }
 
 namespace {
