@@ -58,7 +58,7 @@ void AddBenchCommand(CLI::App& app) {
   cmd->add_option("--camera", args->camera,
                   "Camera of a KITTI folder, passed to every run (see semslam run)");
   cmd->add_option("--out", args->out, "Output folder (run_1/ ... and bench.json)")->required();
-  cmd->add_option("--repeat", args->repeat, "Runs")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--repeat", args->repeat, "Runs")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("run_args", args->run_args, "Arguments for semslam run, after --");
   cmd->callback([args] { Run(*args); });
 }

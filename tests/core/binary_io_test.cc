@@ -88,6 +88,17 @@ TEST(BinaryIo, StreamedChecksummedFileIsTheFileWrittenWhole) {
   EXPECT_EQ(entries, 2) << "streamed.bin and whole.bin alone";
 }
 
+TEST(BinaryIo, AnEmptyFileIsCalledEmpty) {
+  testing::TempDir dir;
+  std::ofstream(dir / "empty.bin").close();
+  try {
+    ReadChecksummedFile(dir / "empty.bin", std::string_view("TESTFIL\0", 8));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("empty.bin: the file is empty"), std::string::npos) << e.what();
+  }
+}
+
 TEST(BinaryIo, ReadingADirectoryAsAChecksummedFileNamesIt) {
   testing::TempDir dir;
   try {

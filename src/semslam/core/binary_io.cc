@@ -91,6 +91,7 @@ ChecksummedFile ReadChecksummedFile(const std::filesystem::path& path, std::stri
   std::string bytes(static_cast<size_t>(file_size), '\0');
   in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   if (in.gcount() != static_cast<std::streamsize>(bytes.size())) throw InputError(path, "cannot read the file");
+  if (bytes.empty()) throw InputError(path, "the file is empty (0 bytes)");
   if (bytes.size() < kHeaderSize || std::string_view(bytes).substr(0, 8) != magic8) {
     throw InputError(path, fmt::format("not a {} file (wrong magic bytes)", magic8.substr(0, magic8.find('\0'))));
   }
