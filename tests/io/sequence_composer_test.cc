@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -93,6 +94,13 @@ TEST(WriteComposedSequence, KittiForthAndBackWithTruthAndABlackFrame) {
     EXPECT_NE(std::string(e.what()).find("no frame 1000 (its frames are 0 to 159)"), std::string::npos) << e.what();
   }
   EXPECT_THROW(WriteComposedSequence(*source, ComposeFrames({1}), dir / "composed", false), InputError);
+  std::ofstream(dir / "afile") << "x";
+  try {
+    WriteComposedSequence(*source, ComposeFrames({1}), dir / "afile", false);
+    ADD_FAILURE() << "a file taken as the output folder";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a file"), std::string::npos) << e.what();
+  }
 }
 
 // A three-frame image folder with per-frame labels (8 bit) and depth (16 bit), as the synthetic city has.

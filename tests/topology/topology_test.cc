@@ -389,6 +389,12 @@ TEST(TopologyFiles, MalformedJsonNamesTheField) {
   j = good;
   j["georeference"]["enu_from_map"]["scale"] = -1;
   expect_error(j, "field 'georeference.enu_from_map.scale'");
+  j = good;
+  j["nodes"][1]["lat"] = 500;
+  expect_error(j, "field 'nodes[1]': not a valid WGS84 position");
+  j = good;
+  j["keyframes"] = nlohmann::json::array();
+  expect_error(j, "anchor_keyframe': index 100, but there is none to refer to");
   try {
     ParseTopologyJson("{\n\"format\":\n", "t.json");
     ADD_FAILURE();

@@ -188,6 +188,8 @@ void WriteComposedSequence(const ImageSequence& source, const std::vector<Compos
     }
   }
   std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw InputError(out, "compose: the output folder is a file");
   if (fs::exists(out, ec) && !fs::is_empty(out, ec))
     throw InputError(out, "compose: the output folder is not empty");
   // The folder was new or empty: a compose that does not finish leaves it so.

@@ -279,7 +279,8 @@ TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) 
   const auto check_index = [&](long long value, size_t size, const std::string& field, bool allow_none) {
     if ((allow_none && value == -1) || (value >= 0 && static_cast<size_t>(value) < size))
       return static_cast<int>(value);
-    r.Fail(field, fmt::format("index {} out of range (0..{})", value, static_cast<long long>(size) - 1));
+    r.Fail(field, size == 0 ? fmt::format("index {}, but there is none to refer to", value)
+                            : fmt::format("index {} out of range (0..{})", value, size - 1));
   };
 
   for (size_t i = 0; i < landmarks.size(); ++i) {
@@ -309,6 +310,7 @@ TopologicalMap ParseTopologyJson(const std::string& text, const fs::path& path) 
     n.enu = r.Vector(j, "enu", p);
     n.map_position = r.Vector(j, "map_xyz", p);
     n.wgs84 = Wgs84{r.Number(j, "lat", p), r.Number(j, "lon", p), r.Number(j, "alt", p)};
+    if (!n.wgs84.IsValid()) r.Fail(p, "not a valid WGS84 position");
     const json& ls = r.Array(j, "landmarks", p);
     for (size_t k = 0; k < ls.size(); ++k) {
       if (!ls[k].is_number_integer()) r.Fail(fmt::format("{}.landmarks[{}]", p, k), "expected an integer");
