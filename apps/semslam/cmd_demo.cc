@@ -36,6 +36,7 @@ void Run(const DemoArgs& args) {
   options.segmenter = args.segmenter;
   options.show_progress = !args.quiet && !Quiet();
   options.provenance = Provenance();
+  options.Check();  // before anything is written
   std::filesystem::create_directories(options.output);
   const LogFile log(options.output / "demo.log", LogHeader());
   const DemoSummary s = RunDemo(options);

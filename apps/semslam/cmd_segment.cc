@@ -210,8 +210,7 @@ void RunSegment(const SegmentArgs& args) {
       if (i + 1 < images.size()) progress.Update(i + 1);
       if (InterruptRequested() && i + 1 < images.size()) {
         throw Interrupted(InterruptSignal(),
-                          fmt::format("segment: interrupted by {} after {} of {} images; nothing "
-                                      "kept",
+                          fmt::format("segment: interrupted by {} after {} of {} images; nothing kept",
                                       InterruptName(), i + 1, images.size()));
       }
     }

@@ -89,8 +89,7 @@ void WriteComposedFrames(const ImageSequence& source, const std::vector<Composed
   for (size_t i = 0; i < frames.size(); ++i) {
     if (InterruptRequested()) {
       throw Interrupted(InterruptSignal(),
-                        fmt::format("compose: interrupted by {} after {} of {} frames; {} is "
-                                    "left as it was",
+                        fmt::format("compose: interrupted by {} after {} of {} frames; {} is left as it was",
                                     InterruptName(), i, frames.size(), out.string()));
     }
     const ComposedFrame& f = frames[i];
