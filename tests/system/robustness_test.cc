@@ -210,8 +210,17 @@ TEST(Interruption, SigintSavesTheFramesDoneAndAMapThatLocalizeLoads) {
       RunSemslam({"localize", "--map", (out / "map.semslam").string(), "--sequence", SequenceDir(data).string(),
                   "--out", (dir / "localize").string(), "--frames", "0:10", "-q"});
   EXPECT_TRUE(localize.Succeeded()) << localize.Describe();
+}
 
-  // A localization stopped before its first frame reports the frames it read, not those it was asked for.
+// A localization stopped before its first frame reports the frames it read, not those it was asked for.
+TEST(StoppedLocalization, ReportsTheFramesItRead) {
+  SEMSLAM_REQUIRE_BINARY();
+  SEMSLAM_ASSERT_ARTIFACT(data, SyntheticDataset());
+  testing::TempDir dir;
+  const fs::path out = dir / "out";
+  const CommandResult run = RunSemslam({"run", "--sequence", SequenceDir(data).string(), "--out",
+                                        out.string(), "--frames", "0:30", "--pacing", "synchronous", "-q"});
+  ASSERT_TRUE(run.Succeeded()) << run.Describe();
   LocalizeOptions stopped;
   stopped.map = out / "map.semslam";
   stopped.sequence = SequenceDir(data);
