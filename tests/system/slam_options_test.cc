@@ -52,6 +52,21 @@ TEST(SlamOptions, RealtimeWaitForMappingIsBounded) {
   EXPECT_NO_THROW(options.Check());
 }
 
+// A value the options' own checks refuse is reported at its line in the file, under its key.
+TEST(SlamOptions, ConfigRangeErrorsNameTheLineAndKey) {
+  testing::TempDir dir;
+  std::ofstream(dir / "range.yaml")
+      << "tracking:\n  pacing: fast\nfeatures:\n  scale_factor: 1.2\n  num_features: 0\n";
+  SlamOptions options;
+  try {
+    ApplySlamConfig(dir / "range.yaml", &options);
+    FAIL() << "num_features 0 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("range.yaml:5: field 'features.num_features'"), std::string::npos)
+        << e.what();
+  }
+}
+
 // Options that mean nothing without another are refused, not silently ignored.
 TEST(RunOptions, FlagsThatNeedAnotherAreRefused) {
   RunOptions options;

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <functional>
 #include <map>
+#include <string_view>
 
 #include "semslam/core/error.h"
 #include "semslam/core/yaml_file.h"
@@ -119,6 +121,16 @@ SourceLocation Where(const std::filesystem::path& file, const YAML::Mark& mark) 
   return {file, mark.line >= 0 ? mark.line + 1 : 0};
 }
 
+// Whether `word` occurs in `text` as a whole identifier (not as part of a longer one).
+bool NamesWord(std::string_view text, std::string_view word) {
+  const auto identifier = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (size_t at = text.find(word); at != std::string_view::npos; at = text.find(word, at + 1)) {
+    const size_t end = at + word.size();
+    if ((at == 0 || !identifier(text[at - 1])) && (end == text.size() || !identifier(text[end]))) return true;
+  }
+  return false;
+}
+
 // A map starts from init_min_matches matches between two frames: fewer features than that per frame and no
 // run could ever start one (it would track nothing, silently).
 void CheckFeatureBudget(const SlamOptions& o, const std::filesystem::path& file,
@@ -181,7 +193,14 @@ void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
     updated.mapper.Check();
     updated.loop.Check();
   } catch (const InvalidArgument& e) {
-    throw InputError(file, e.what());
+    // The options' checks name their field; the key of that name in this file gives the line.
+    const std::string message = e.what();
+    for (const auto& [field, line] : lines) {
+      if (NamesWord(message, field.substr(field.find('.') + 1))) {
+        throw InputError(SourceLocation{file, line}, field, message);
+      }
+    }
+    throw InputError(file, message);
   }
   CheckFeatureBudget(updated, file, lines);
   *options = updated;
