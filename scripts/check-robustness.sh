@@ -3,7 +3,8 @@
 #   SIGINT after 6 s            -> exit 130, the trajectory of the frames done, run.json "interrupted", a map
 #                                  that `semslam localize` loads
 #   a second signal             -> quits at once; the next run removes the temporary files it left
-#   a reused --out              -> refused without --overwrite; with it, nothing of the earlier run is left
+#   a reused --out              -> refused without --overwrite; with it, nothing of the earlier run is left,
+#                                  but never when it holds the run's own --map-in
 #   two runs into one --out     -> the second is refused
 #   an unwritable --out         -> refused before the first frame, with the system's reason
 #   a Latin-1 landmark name     -> refused up front (one line naming file:line)
@@ -83,6 +84,11 @@ check "a reused --out is refused without --overwrite ($(cat "$work/reuse.err"))"
 "$bin" run --sequence "$seq" --out "$work/reuse" --frames 0:20 --pacing fast -q --overwrite >/dev/null 2>&1
 [ ! -e "$work/reuse/plots-of-the-earlier-run.txt" ] && [ "$(json "$work/reuse/run.json" 'd["frames"]')" = 20 ]
 check "with --overwrite it holds nothing of the earlier run ($before entries before, $(ls "$work/reuse" | wc -l) after)" $?
+"$bin" run --sequence "$seq" --out "$work/reuse" --map-in "$work/reuse/map.semslam" --frames 0:10 --pacing fast -q \
+  --overwrite >/dev/null 2>"$work/reuse_map.err"
+status=$?
+[ "$status" -ne 0 ] && grep -q "which this run reads" "$work/reuse_map.err" && [ -s "$work/reuse/map.semslam" ]
+check "an --out holding the run's --map-in is never emptied ($(cat "$work/reuse_map.err"))" $?
 
 # 4. Two runs into one --out at once.
 "$bin" run --sequence "$seq" --out "$work/two" --pacing realtime -q >/dev/null 2>&1 &
