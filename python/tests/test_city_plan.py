@@ -21,6 +21,13 @@ def touch(path, text=""):
         f.write(text)
 
 
+def semslam_output(folder, run_json="{\"status\": \"ok\"}"):
+    """A folder as a semslam command leaves it: its lock file and run.json (a finished one by default)."""
+    touch(os.path.join(folder, ".semslam.lock"), "pid 1, semslam run\n")
+    touch(os.path.join(folder, "run.json"), run_json)
+    return folder
+
+
 def synthetic_city(root):
     """The layout `semslam synth --out ROOT` writes (only the parts the city command looks at)."""
     os.makedirs(os.path.join(root, "sequences", "00", "image_0"))
@@ -204,19 +211,19 @@ class CityPlanTest(unittest.TestCase):
         partial = city_tasks.new_partial(final)
         self.assertFalse(os.path.exists(stale))
         self.assertTrue(os.path.basename(partial).startswith(".d1.partial-"))
-        touch(os.path.join(partial, "run.json"), "{\"status\": \"complete\", \"frames\": 3}")
+        semslam_output(partial, "{\"status\": \"complete\", \"frames\": 3}")
         self.assertFalse(city_tasks.is_complete(final))
         city_tasks.move_into_place(partial, final)
         self.assertTrue(city_tasks.is_complete(final))
         # A newer input makes an output stale; a folder that is replaced leaves nothing beside it.
         merged = self.path("out", "city")
-        touch(os.path.join(merged, "run.json"), "{}")
+        semslam_output(merged)
         os.utime(os.path.join(final, "run.json"), ns=(1, 1))
         self.assertTrue(city_tasks.is_complete(merged, [final]))
         os.utime(os.path.join(merged, "run.json"), ns=(0, 0))
         self.assertFalse(city_tasks.is_complete(merged, [final]))
         again = city_tasks.new_partial(merged)
-        touch(os.path.join(again, "run.json"), "{}")
+        semslam_output(again)
         city_tasks.move_into_place(again, merged)
         self.assertEqual(sorted(os.listdir(self.path("out"))), ["city", "drives"])
 
@@ -224,9 +231,9 @@ class CityPlanTest(unittest.TestCase):
         out = self.path("out")
         drives = [Drive("a", "/data/a"), Drive("b", "/data/b")]
         for d in drives:
-            touch(os.path.join(out, "drives", d.name, "run.json"), "{\"frames\": 5}")
+            semslam_output(os.path.join(out, "drives", d.name), "{\"status\": \"complete\", \"frames\": 5}")
             os.utime(os.path.join(out, "drives", d.name, "run.json"), ns=(1, 1))
-        touch(os.path.join(out, "city", "run.json"), "{}")
+        semslam_output(os.path.join(out, "city"))
         self.assertFalse(city.city_is_current(out, drives))  # no city.json: not known what it holds
         city.write_city_json(out, drives, {"drive a": {"frames": 5}}, {"sessions": 2})
         self.assertTrue(city.city_is_current(out, drives))
@@ -239,14 +246,18 @@ class CityPlanTest(unittest.TestCase):
         self.assertFalse(city.city_is_current(out, drives))
 
     def fake_semslam(self):
-        """A stand-in for the binary that writes a run.json where `run` or `merge` is told to (--out), counts its
-        calls in calls.txt, and fails when FAIL_SEMSLAM is set in its environment."""
+        """A stand-in for the binary that writes a run.json (recording its command) and its lock file where `run` or
+        `merge` is told to (--out), counts its calls in calls.txt, and fails with exit code $FAIL_SEMSLAM when that
+        is set in its environment."""
         path = self.path("fake_semslam")
         touch(path, """#!/bin/sh
 echo "$1" >> "$(dirname "$0")/calls.txt"
-if [ -n "$FAIL_SEMSLAM" ]; then echo "$1: error: it broke" >&2; exit 4; fi
+if [ -n "$FAIL_SEMSLAM" ]; then echo "$1: error: it broke" >&2; exit "$FAIL_SEMSLAM"; fi
+command="\\"$0\\""
+for arg in "$@"; do command="$command, \\"$arg\\""; done
 while [ $# -gt 0 ]; do [ "$1" = --out ] && out="$2"; shift; done
-mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}}' > "$out/run.json"
+mkdir -p "$out" && echo "pid $$, semslam" > "$out/.semslam.lock"
+echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, "provenance": {"command": ['"$command"']}}' > "$out/run.json"
 """)
         os.chmod(path, 0o755)
         return path
@@ -261,7 +272,7 @@ mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "ses
         drive = Drive("d1", self.path("seq"))
         result = city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])
         self.assertEqual((result["frames"], result["reused"], result["path"]), (7, False, self.path(drives_dir, "d1")))
-        self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, [])["reused"])
+        self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])["reused"])
         self.assertEqual(self.calls(), ["run"])
         other = city_tasks.run_drive(Drive("d0", self.path("seq0")), drives_dir, fake, [])
         inputs = [result, other["path"]]  # a task's summary or a folder
@@ -276,7 +287,7 @@ mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "ses
         self.assertEqual((single["frames"], self.calls()[-1]), (7, "merge"))
         self.assertEqual(len(self.calls()), 4)
         shutil.rmtree(self.path("out", "single"))
-        os.environ["FAIL_SEMSLAM"] = "1"
+        os.environ["FAIL_SEMSLAM"] = "4"
         try:
             with self.assertRaisesRegex(city_tasks.CityTaskError, r"(?s)drive d2 failed \(exit code 4\).*it broke"):
                 city_tasks.run_drive(Drive("d2", self.path("seq")), drives_dir, fake, [])
@@ -293,6 +304,63 @@ mkdir -p "$out" && echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "ses
                                    "drive x")
         with self.assertRaisesRegex(city_tasks.CityTaskError, r"cannot start"):
             city_tasks.run_command([self.path("no_binary")], "drive x")
+
+
+    def test_only_a_folder_semslam_wrote_is_replaced(self):
+        touch(self.path("out2", "drives", "b", "notes.txt"), "mine")
+        partial = city_tasks.new_partial(self.path("out2", "drives", "b"))
+        semslam_output(partial)
+        with self.assertRaisesRegex(city_tasks.CityTaskError, r"drives/b exists and is not a semslam output"):
+            city_tasks.move_into_place(partial, self.path("out2", "drives", "b"))
+        self.assertTrue(os.path.isfile(self.path("out2", "drives", "b", "notes.txt")))
+        semslam_output(self.path("out3", "drives", "b"), "{\"status\": \"interrupted\"}")
+        city_tasks.move_into_place(partial, self.path("out3", "drives", "b"))  # semslam's own: replaced
+        with open(self.path("out3", "drives", "b", "run.json")) as f:
+            self.assertEqual(json.load(f), {"status": "ok"})
+
+    def test_an_unfinished_run_is_not_complete(self):
+        for status in ("interrupted", "failed", None):
+            with self.subTest(status=status):
+                folder = semslam_output(self.path("run", str(status)), json.dumps({"status": status, "frames": 3}))
+                self.assertFalse(city_tasks.is_complete(folder))
+                merged = semslam_output(self.path("merged", str(status)))
+                self.assertFalse(city_tasks.is_complete(merged, [folder]))
+
+    def test_a_run_made_with_other_arguments_is_made_again(self):
+        fake = self.fake_semslam()
+        drives_dir = self.path("out", "drives")
+        drive = Drive("d1", synthetic_city(self.path("d1")))
+        city_tasks.run_drive(drive, drives_dir, fake, ["--frames", "0:20"])
+        final = os.path.join(drives_dir, "d1")
+        self.assertIsNone(city_tasks.made_otherwise(final, city_tasks.drive_command(drive, ["--frames", "0:20"])))
+        self.assertEqual(city_tasks.made_otherwise(final, city_tasks.drive_command(drive, ["--frames", "0:30"])),
+                         "made with other arguments (had --frames 0:20; now --frames 0:30)")
+        self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, ["--frames", "0:20"])["reused"])
+        self.assertFalse(city_tasks.run_drive(drive, drives_dir, fake, ["--frames", "0:30"])["reused"])
+        # The same name for another sequence (a manifest's names swapped): made again too.
+        other = Drive("d1", synthetic_city(self.path("d2")))
+        self.assertIn(f"now --sequence {other.sequence}",
+                      city_tasks.made_otherwise(final, city_tasks.drive_command(other, ["--frames", "0:30"])))
+        self.assertFalse(city_tasks.run_drive(other, drives_dir, fake, ["--frames", "0:30"])["reused"])
+        self.assertEqual(self.calls(), ["run", "run", "run"])
+        # A run.json without the command: its sequence is compared.
+        touch(os.path.join(final, "run.json"), json.dumps({"status": "complete", "config": {"sequence": "/x"}}))
+        self.assertEqual(city_tasks.made_otherwise(final, city_tasks.drive_command(other, [])),
+                         "made from another sequence (/x)")
+
+    def test_only_a_failure_that_may_not_repeat_is_tried_again(self):
+        fake = self.fake_semslam()
+        for code, runs in (("1", 1), ("2", 1), ("4", 3)):  # semslam's "failed" and "bad input" would repeat
+            with self.subTest(code=code):
+                os.environ["FAIL_SEMSLAM"] = code
+                try:
+                    with self.assertRaisesRegex(city_tasks.CityTaskError, rf"exit code {code}"):
+                        city_tasks.run_drive(Drive("d", self.path("seq")), self.path("out", "drives"), fake, [])
+                finally:
+                    del os.environ["FAIL_SEMSLAM"]
+                self.assertEqual(len(self.calls()), runs)
+                os.remove(self.path("calls.txt"))
+                self.assertEqual(os.listdir(self.path("out", "drives")), [])
 
 
 if __name__ == "__main__":
