@@ -21,6 +21,7 @@ class Drive:
     landmarks: Optional[str] = None    # absolute, or None: no catalogue
     gps_lever_arm: Optional[List[float]] = None  # X,Y,Z metres in the camera frame
     named_by_hand: bool = False  # the manifest gave the name: it is kept when names clash
+    origin: str = ""  # where it was given, for messages: "--drives[1]", "FILE: drives[0]"
 
     def run_args(self) -> List[str]:
         """The arguments of `semslam run` that say what this drive is (no --out)."""
@@ -48,6 +49,69 @@ def _drive_root(sequence: str) -> str:
     return sequence
 
 
+def _sequences_in(root: str) -> List[str]:
+    """The sequence folders of a dataset root (ROOT/sequences/XX with image_0/), as `semslam run` looks for them."""
+    folder = os.path.join(root, "sequences")
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return []
+    return [os.path.join(folder, n) for n in names if os.path.isdir(os.path.join(folder, n, "image_0"))]
+
+
+def drive_identity(sequence: str) -> str:
+    """What a drive is, for comparing two: the real path of its sequence folder, a dataset root holding one
+    sequence standing for that sequence (`semslam run` reads the same frames from both)."""
+    sequence = os.path.realpath(sequence)
+    if os.path.isdir(sequence):
+        only = _sequences_in(sequence)
+        if len(only) == 1 and not _holds_a_sequence(sequence):
+            return os.path.realpath(only[0])
+    return sequence
+
+
+def drive_folder(sequence: str) -> str:
+    """The folder that is the drive (its data): the synthetic city's X for X/sequences/NN (its only sequence), else
+    the sequence folder, or the folder of a camera.yaml."""
+    if not os.path.isdir(sequence):
+        return os.path.dirname(sequence)
+    root = _drive_root(sequence)
+    if root != sequence and len(_sequences_in(root)) == 1:
+        return root
+    return sequence
+
+
+def _holds_a_sequence(folder: str) -> bool:
+    """A sequence folder as `semslam run` opens it directly (not through ROOT/sequences/XX)."""
+    return (os.path.isdir(os.path.join(folder, "image_0")) or os.path.isfile(os.path.join(folder, "calib.txt")) or
+            any(os.path.isdir(os.path.join(folder, f"image_0{i}")) for i in range(4)) or
+            any(os.path.isfile(os.path.join(folder, f)) for f in ("camera.yaml", "camera.yml")))
+
+
+def check_layout(sequence: str) -> None:
+    """Refuses what `semslam run --sequence` would refuse by its layout alone (src/semslam/io/sequence.cc,
+    OpenSequence), so that a wrong folder is reported before a cluster starts instead of failing on a worker."""
+    expected = ("expected a KITTI odometry sequence folder (image_0/, calib.txt), a dataset root holding "
+                "sequences/XX/image_0/, a KITTI raw drive folder (image_00/data/) or an image folder with "
+                "camera.yaml (or the .yaml itself)")
+    if os.path.isfile(sequence):
+        if not sequence.endswith((".yaml", ".yml")):
+            raise CityInputError(f"{sequence}: is a file, not a sequence; {expected}")
+        return
+    if _holds_a_sequence(sequence):
+        return
+    if os.path.isdir(os.path.join(sequence, "sequences")):
+        found = _sequences_in(sequence)
+        if not found:
+            raise CityInputError(f"{sequence}/sequences: holds no sequence folder with image_0/ (expected "
+                                 "sequences/XX/image_0/)")
+        if len(found) > 1:
+            raise CityInputError(f"{sequence}/sequences: holds {len(found)} sequences; give each as a drive: "
+                                 f"{', '.join(found)}")
+        return
+    raise CityInputError(f"{sequence}: not a sequence folder; {expected}")
+
+
 def _default_name(sequence: str) -> str:
     """The drive's output folder name: X for X/sequences/NN when NN is X's only sequence (the synthetic city),
     X_NN when there are more (a KITTI odometry dataset), else the sequence folder's name."""
@@ -60,9 +124,11 @@ def _default_name(sequence: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", name)
 
 
-def discover_drive(sequence: str) -> Drive:
+def discover_drive(sequence: str, origin: str = "") -> Drive:
     """A drive from its sequence folder alone: GPS from ROOT/oxts (the synthetic city, a KITTI raw drive), the
     catalogue from ROOT/landmarks.csv or ROOT/landmarks.geojson, where ROOT is _drive_root(sequence)."""
+    if not sequence:  # os.path.abspath("") would be the current folder
+        raise CityInputError(f"{origin or 'a drive'}: an empty path is not a drive")
     sequence = os.path.abspath(sequence)
     if not os.path.exists(sequence):
         raise CityInputError(f"{sequence}: drive not found (a sequence folder, as `semslam run --sequence` takes)")
@@ -73,7 +139,7 @@ def discover_drive(sequence: str) -> Drive:
     landmarks = next((os.path.join(root, f) for f in _LANDMARK_FILES if os.path.isfile(os.path.join(root, f))),
                      None)
     return Drive(name=_default_name(sequence), sequence=sequence, gps=gps if os.path.isdir(gps) else None,
-                 landmarks=landmarks)
+                 landmarks=landmarks, origin=origin or sequence)
 
 
 def _manifest_path(value, key: str, index: int, manifest: str, base: str) -> Optional[str]:
@@ -98,10 +164,14 @@ def read_manifest(path: str) -> List[Drive]:
             text = f.read()
     except OSError as e:
         raise CityInputError(f"{path}: cannot read the manifest: {e.strerror}") from None
+    except UnicodeDecodeError as e:
+        raise CityInputError(f"{path}: not UTF-8 text (byte {e.start}): a manifest is JSON") from None
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as e:
         raise CityInputError(f"{path}:{e.lineno}: not JSON: {e.msg}") from None
+    except RecursionError:  # the parser recurses per nesting level
+        raise CityInputError(f"{path}: nested too deeply to be a manifest") from None
     if not isinstance(doc, dict) or not isinstance(doc.get("drives"), list) or not doc["drives"]:
         raise CityInputError(f"{path}: expected an object with a non-empty list \"drives\"")
     base = os.path.dirname(path)
@@ -119,7 +189,7 @@ def read_manifest(path: str) -> List[Drive]:
         sequence = _manifest_path(entry["sequence"], "sequence", i, path, base)
         if sequence is None:
             raise CityInputError(f"{path}: drives[{i}].sequence: expected a path, not null")
-        drive = discover_drive(sequence)
+        drive = discover_drive(sequence, origin=f"{path}: drives[{i}]")
         if "name" in entry:
             name = entry["name"]
             if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name):
@@ -142,17 +212,25 @@ def read_manifest(path: str) -> List[Drive]:
     return drives
 
 
+def _where(drive: Drive) -> str:
+    return drive.origin or drive.sequence
+
+
 def unique_names(drives: Sequence[Drive]) -> None:
     """Gives drives whose names clash (two synthetic cities both named `city`) suffixes -2, -3, ...; two names set
     by hand that clash, or one sequence given twice, are errors."""
-    sequences = [os.path.realpath(d.sequence) for d in drives]
+    sequences = [drive_identity(d.sequence) for d in drives]
     for i, sequence in enumerate(sequences):
         if sequence in sequences[:i]:
-            raise CityInputError(f"{drives[i].sequence}: the same drive is given twice")
-    fixed_names = [d.name for d in drives if d.named_by_hand]
-    for name in fixed_names:
-        if fixed_names.count(name) > 1:
-            raise CityInputError(f"two drives are named '{name}': drive names must differ")
+            first = drives[sequences.index(sequence)]
+            raise CityInputError(f"{drives[i].sequence}: the same drive is given twice ({_where(first)} and "
+                                 f"{_where(drives[i])})")
+    by_hand = [d for d in drives if d.named_by_hand]
+    for i, drive in enumerate(by_hand):
+        twin = next((d for d in by_hand[:i] if d.name == drive.name), None)
+        if twin is not None:
+            raise CityInputError(f"two drives are named '{drive.name}' ({_where(twin)} and {_where(drive)}): drive "
+                                 "names must differ")
     taken = set()
     for drive in sorted(drives, key=lambda d: not d.named_by_hand):  # hand-set names keep theirs
         name, k = drive.name, 2

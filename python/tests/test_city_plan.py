@@ -8,11 +8,14 @@ import io
 import json
 import os
 import shutil
+import socket
 import tempfile
+import time
 import unittest
 
 from semslam import city, city_tasks
-from semslam.city_plan import CityInputError, Drive, discover_drive, merge_tree, read_manifest, unique_names
+from semslam.city_plan import (CityInputError, Drive, discover_drive, merge_tree, read_manifest,
+                               unique_names)
 
 
 def touch(path, text=""):
@@ -306,6 +309,13 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
             city_tasks.run_command([self.path("no_binary")], "drive x")
 
 
+    def run_main(self, argv):
+        """city.main(argv): (exit code, stderr)."""
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            code = city.main(argv)
+        return code, err.getvalue()
+
     def test_only_a_folder_semslam_wrote_is_replaced(self):
         touch(self.path("out2", "drives", "b", "notes.txt"), "mine")
         partial = city_tasks.new_partial(self.path("out2", "drives", "b"))
@@ -361,6 +371,32 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
                 self.assertEqual(len(self.calls()), runs)
                 os.remove(self.path("calls.txt"))
                 self.assertEqual(os.listdir(self.path("out", "drives")), [])
+
+    def test_manifests_that_are_not_text_or_too_deep_name_the_file(self):
+        path = self.path("binary.json")
+        with open(path, "wb") as f:
+            f.write(b"\xff\xfe{\"drives\": []}")
+        with self.assertRaisesRegex(CityInputError, r"binary\.json: not UTF-8 text"):
+            read_manifest(path)
+        deep = self.write_manifest("{\"drives\": " + "[" * 100000 + "]" * 100000 + "}", "deep.json")
+        with self.assertRaisesRegex(CityInputError, r"deep\.json: nested too deeply"):
+            read_manifest(deep)
+
+    def test_a_dataset_root_and_its_only_sequence_are_the_same_drive(self):
+        sequence = synthetic_city(self.path("d1"))
+        with self.assertRaisesRegex(CityInputError, r"the same drive is given twice \(--drives d1 and "):
+            unique_names([discover_drive(self.path("d1"), "--drives d1"), discover_drive(sequence)])
+        for n in ("00", "01"):  # a KITTI odometry dataset: each sequence a drive of its own
+            os.makedirs(self.path("kitti", "sequences", n, "image_0"))
+        unique_names([discover_drive(self.path("kitti", "sequences", n)) for n in ("00", "01")])
+
+    def test_clashing_names_set_by_hand_name_their_manifest_entries(self):
+        synthetic_city(self.path("a"))
+        synthetic_city(self.path("b"))
+        manifest = self.write_manifest({"drives": [{"sequence": "a", "name": "x"}, {"sequence": "b", "name": "x"}]})
+        with self.assertRaisesRegex(CityInputError, r"two drives are named 'x' \(.*city\.json: drives\[0\] and "
+                                                    r".*city\.json: drives\[1\]\)"):
+            unique_names(read_manifest(manifest))
 
 
 if __name__ == "__main__":
