@@ -263,16 +263,40 @@ class CityOnDaskTest(unittest.TestCase):
         assert_complete_city(self, self.sequences, out, output)
         self.assertRegex(output, rf"drive {drive}: done: {FRAMES} frames")
 
+    def test_only_the_merges_it_made_are_removed(self):
+        self.require_merge()
+        first, code, output = self.first_city()
+        self.assertEqual(code, 0, output)
+        out = os.path.join(self.tmp, "city_own_merges")
+        shutil.copytree(os.path.join(first, "drives"), os.path.join(out, "drives"))  # made already: not run again
+        mine = os.path.join(out, "merges", "mine", "notes.txt")
+        os.makedirs(os.path.dirname(mine))
+        with open(mine, "w") as f:
+            f.write("not the city command's")
+        code, output = self.city(out).finish()
+        self.assertEqual(code, 0, output)
+        self.assertIn("merge 1-0: done", output)
+        self.assertEqual(os.listdir(os.path.join(out, "merges")), ["mine"])
+        self.assertTrue(os.path.isfile(mine))
+
     def test_a_failing_drive_fails_the_city_with_its_error(self):
-        bad = os.path.join(self.tmp, "not_a_drive")
-        os.makedirs(bad, exist_ok=True)
+        # A folder that is no drive at all is refused before any task (exit code 2, bad input).
+        empty = os.path.join(self.tmp, "not_a_drive")
+        os.makedirs(empty, exist_ok=True)
         out = os.path.join(self.tmp, "city_bad_drive")
+        code, output = self.city(out, drives=[empty]).finish()
+        self.assertEqual(code, 2, output)
+        self.assertIn("not_a_drive: not a sequence folder", output)
+        self.assertFalse(os.path.exists(out))
+        # One that looks like a sequence but has no images fails in semslam, once (it would fail again).
+        bad = os.path.join(self.tmp, "no_images")
+        os.makedirs(os.path.join(bad, "image_0"), exist_ok=True)
         code, output = self.city(out, drives=[bad]).finish()
         self.assertEqual(code, 1, output)
-        self.assertRegex(output, r"drive not_a_drive: FAILED: drive not_a_drive failed \(exit code \d+\)")
-        self.assertIn("not a sequence folder", output)  # semslam's stderr
-        self.assertEqual(os.listdir(os.path.join(out, "drives")), [])
-        self.assertFalse(os.path.exists(os.path.join(out, "city")))
+        self.assertRegex(output, r"drive no_images: FAILED: drive no_images failed \(exit code [12]\)")
+        self.assertIn("no .png images", output)  # semslam's stderr
+        self.assertNotIn("attempt 2", output)
+        self.assertFalse(os.path.exists(out))  # made by the command and left empty: removed
 
     def test_a_failing_merge_fails_the_city_with_its_stderr(self):
         self.require_merge()

@@ -14,7 +14,7 @@ import time
 import unittest
 
 from semslam import city, city_tasks
-from semslam.city_plan import (CityInputError, Drive, discover_drive, merge_tree, read_manifest,
+from semslam.city_plan import (CityInputError, Drive, check_layout, discover_drive, merge_tree, read_manifest,
                                unique_names)
 
 
@@ -316,6 +316,36 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
             code = city.main(argv)
         return code, err.getvalue()
 
+    def test_an_out_holding_a_drive_is_refused_and_nothing_is_removed(self):
+        fake = self.fake_semslam()
+        out = self.path("out")
+        # The drive's sequence, GPS log or catalogue in a folder the command replaces, or OUT inside the drive.
+        for where in (("drives", "a"), ("city",), ("merges", "m")):
+            with self.subTest(where=where):
+                sequence = synthetic_city(os.path.join(out, *where))
+                code, err = self.run_main(["--drives", sequence, "--out", out, "--semslam", fake])
+                self.assertEqual(code, 2, err)
+                self.assertRegex(err, rf"its sequence .* lies in {out}/{where[0]}, which the city command writes")
+                self.assertTrue(os.path.isdir(os.path.join(sequence, "image_0")))
+                shutil.rmtree(out)
+        sequence = synthetic_city(self.path("b"))
+        touch(os.path.join(out, "city", "gps.csv"), "t,lat,lon\n")
+        manifest = self.write_manifest({"drives": [{"sequence": sequence, "gps": "out/city/gps.csv"}]})
+        code, err = self.run_main(["--manifest", manifest, "--out", out, "--semslam", fake])
+        self.assertEqual(code, 2, err)
+        self.assertIn("its GPS log", err)
+        self.assertTrue(os.path.isfile(os.path.join(out, "city", "gps.csv")))
+        for inside in (self.path("b", "out"), self.path("b", "sequences", "00", "out")):
+            code, err = self.run_main(["--drives", sequence, "--out", inside, "--semslam", fake])
+            self.assertEqual(code, 2, err)
+            self.assertIn(f"--out lies in drive b's folder {self.path('b')}", err)
+            self.assertFalse(os.path.exists(inside))
+        # A folder where a drive's run would go that semslam did not write: refused, and never replaced.
+        touch(self.path("out2", "drives", "b", "notes.txt"), "mine")
+        code, err = self.run_main(["--drives", sequence, "--out", self.path("out2"), "--semslam", fake])
+        self.assertEqual(code, 2, err)
+        self.assertIn("drives/b: exists and is not a semslam output", err)
+
     def test_only_a_folder_semslam_wrote_is_replaced(self):
         touch(self.path("out2", "drives", "b", "notes.txt"), "mine")
         partial = city_tasks.new_partial(self.path("out2", "drives", "b"))
@@ -358,6 +388,18 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
         self.assertEqual(city_tasks.made_otherwise(final, city_tasks.drive_command(other, [])),
                          "made from another sequence (/x)")
 
+    def test_the_city_is_not_current_once_a_drive_is_to_be_made_again(self):
+        fake = self.fake_semslam()
+        drives_dir = self.path("out", "drives")
+        other = Drive("d1", synthetic_city(self.path("d2")))
+        city_tasks.run_drive(other, drives_dir, fake, [])
+        semslam_output(self.path("out", "city"))
+        city.write_city_json(self.path("out"), [other], {}, {})
+        self.assertTrue(city.city_is_current(self.path("out"), [other], []))
+        self.assertFalse(city.city_is_current(self.path("out"), [other], ["--mode", "stereo"]))
+        self.assertRegex(city.drive_redone_because(self.path("out"), other, ["--mode", "stereo"]),
+                         r"now --mode stereo")
+
     def test_only_a_failure_that_may_not_repeat_is_tried_again(self):
         fake = self.fake_semslam()
         for code, runs in (("1", 1), ("2", 1), ("4", 3)):  # semslam's "failed" and "bad input" would repeat
@@ -371,6 +413,108 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
                 self.assertEqual(len(self.calls()), runs)
                 os.remove(self.path("calls.txt"))
                 self.assertEqual(os.listdir(self.path("out", "drives")), [])
+
+    def test_a_second_command_on_the_same_out_is_refused(self):
+        sequence = synthetic_city(self.path("a"))
+        fake = self.fake_semslam()
+        lock = city.lock_out(self.path("out"))
+        try:
+            code, err = self.run_main(["--drives", sequence, "--out", self.path("out"), "--semslam", fake])
+        finally:
+            os.close(lock)
+        self.assertEqual(code, 2, err)
+        self.assertIn(f"another semslam.city command is writing into this folder (pid {os.getpid()}, "
+                      "semslam.city)", err)
+        os.close(city.lock_out(self.path("out")))  # free again
+
+    def test_drives_are_checked_before_a_cluster_starts(self):
+        fake = self.fake_semslam()
+        os.makedirs(self.path("empty"))
+        os.makedirs(self.path("root", "sequences", "no_images"))
+        for n in ("00", "01"):
+            os.makedirs(self.path("two", "sequences", n, "image_0"))
+        os.makedirs(self.path("raw", "image_00", "data"))
+        os.makedirs(self.path("odometry", "image_0"))
+        touch(self.path("calib_only", "calib.txt"))
+        touch(self.path("images", "camera.yaml"))
+        touch(self.path("cam.yaml"))
+        touch(self.path("notes.txt"))
+        for good in ("raw", "odometry", "calib_only", "images", "cam.yaml", "two/sequences/01"):
+            check_layout(self.path(good))
+        cases = [("empty", "not a sequence folder"), ("root", "holds no sequence folder with image_0"),
+                 ("two", "holds 2 sequences; give each as a drive")]
+        with self.assertRaisesRegex(CityInputError, "is a file, not a sequence"):
+            check_layout(self.path("notes.txt"))
+        for name, message in cases:
+            with self.subTest(drive=name):
+                with self.assertRaisesRegex(CityInputError, message):
+                    check_layout(self.path(name))
+                code, err = self.run_main(["--drives", self.path(name), "--out", self.path("o"), "--semslam", fake])
+                self.assertEqual(code, 2, err)
+                self.assertIn(message, err)
+                self.assertFalse(os.path.exists(self.path("o")))
+
+    def test_bad_arguments_are_refused_at_once(self):
+        for bad in (["--frames", "10"], ["--frames", "a:b"], ["--frames", "-1:5"], ["--frames", "20:10"],
+                    ["--", "--out", "x"], ["--", "--sequence=x"], ["--", "--map-in", "m.semslam"]):
+            with self.subTest(argv=bad):
+                err = io.StringIO()
+                with self.assertRaises(SystemExit) as exit_, contextlib.redirect_stderr(err):
+                    city.parse_args(["--drives", "a", "--out", "o", *bad])
+                self.assertEqual(exit_.exception.code, 2)
+        for good in ("0:50", ":50", "10:", ":"):
+            self.assertEqual(city.parse_args(["--drives", "a", "--out", "o", "--frames", good]).frames, good)
+        # An empty path would be the current folder.
+        for bad in (["--drives", "", "--out", "o"], ["--drives", "a", "--out", ""],
+                    ["--manifest", "", "--out", "o"]):
+            with self.subTest(argv=bad), self.assertRaises(SystemExit), contextlib.redirect_stderr(io.StringIO()):
+                city.parse_args(bad)
+        with self.assertRaisesRegex(CityInputError, "empty path"):
+            discover_drive("")
+
+    def test_a_bad_scheduler_address_is_reported_at_once(self):
+        with socket.socket() as s:  # a port nothing listens on
+            s.bind(("127.0.0.1", 0))
+            closed = s.getsockname()[1]
+        cases = [("garbage", "expected tcp://HOST:PORT"), ("http://localhost:8786", "expected tcp://HOST:PORT"),
+                 ("tcp://localhost", "expected tcp://HOST:PORT"), ("tcp://localhost:99999", "not in 1..65535"),
+                 ("tcp://no-such-host.invalid:8786", "unknown host 'no-such-host.invalid'"),
+                 (f"tcp://127.0.0.1:{closed}", "cannot connect: Connection refused")]
+        for address, message in cases:
+            with self.subTest(address=address):
+                start = time.monotonic()
+                with self.assertRaisesRegex(CityInputError, message):
+                    city.check_scheduler(address)
+                self.assertLess(time.monotonic() - start, city.CONNECT_TIMEOUT_S)
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            s.listen()
+            port = s.getsockname()[1]
+            self.assertEqual(city.check_scheduler(f"127.0.0.1:{port}"), f"tcp://127.0.0.1:{port}")
+        sequence = synthetic_city(self.path("a"))
+        code, err = self.run_main(["--drives", sequence, "--out", self.path("o"), "--semslam", self.fake_semslam(),
+                                   "--scheduler", "http://localhost:8786"])
+        self.assertEqual((code, os.path.exists(self.path("o"))), (2, False), err)
+
+    def test_an_interruption_or_failure_before_any_output_leaves_no_new_out(self):
+        sequence = synthetic_city(self.path("a"))
+        fake = self.fake_semslam()
+        real_connect = city.connect
+        try:
+            for raised, code in ((KeyboardInterrupt(), 130), (city.Terminated(), 143), (OSError("refused"), 2)):
+                with self.subTest(raised=type(raised).__name__):
+                    def connect(*_):
+                        raise raised
+                    city.connect = connect
+                    for out in (self.path("new"), self.path("kept")):
+                        os.makedirs(self.path("kept"), exist_ok=True)
+                        got, err = self.run_main(["--drives", sequence, "--out", out, "--semslam", fake])
+                        self.assertEqual(got, code, err)
+                        self.assertNotIn("Traceback", err)
+                    self.assertFalse(os.path.exists(self.path("new")))  # made by the command: removed
+                    self.assertTrue(os.path.isdir(self.path("kept")))  # there before: kept
+        finally:
+            city.connect = real_connect
 
     def test_manifests_that_are_not_text_or_too_deep_name_the_file(self):
         path = self.path("binary.json")
