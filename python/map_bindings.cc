@@ -6,6 +6,7 @@
 #include <string>
 
 #include "bindings.h"
+#include "semslam/core/error.h"
 #include "semslam/map/map.h"
 #include "semslam/map/map_file.h"
 #include "semslam/semantics/class_table.h"
@@ -34,7 +35,22 @@ struct LoadedMap {
 
 py::object ParseJson(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
 
+// The "geo" section: landmarks and the georeference of each map in the world.
+void ReadGeoSection(const py::dict& geo, LoadedMap& out) {
+  if (geo.contains("landmarks")) out.landmarks = geo["landmarks"];
+  if (geo.contains("georeference")) out.georeference = geo["georeference"];  // version 1: one map
+  if (geo.contains("maps")) {
+    for (const py::handle entry : geo["maps"].cast<py::list>()) {
+      const py::dict e = entry.cast<py::dict>();
+      out.georeferences[e["map"]] = e["georeference"];
+    }
+    if (geo.contains("landmarks_map") && out.georeferences.contains(geo["landmarks_map"]))
+      out.georeference = out.georeferences[geo["landmarks_map"]];
+  }
+}
+
 LoadedMap LoadMap(const std::filesystem::path& path) {
+  if (path.empty()) throw py::value_error("load_map: an empty path");
   Map map;
   const MapFileContents contents = ReadMapFile(path, map);
   LoadedMap out;
@@ -78,16 +94,12 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
     out.topology = ParseJson(it->second);
   }
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
-    const py::dict geo = ParseJson(it->second);
-    if (geo.contains("landmarks")) out.landmarks = geo["landmarks"];
-    if (geo.contains("georeference")) out.georeference = geo["georeference"];  // version 1: one map
-    if (geo.contains("maps")) {
-      for (const py::handle entry : geo["maps"].cast<py::list>()) {
-        const py::dict e = entry.cast<py::dict>();
-        out.georeferences[e["map"]] = e["georeference"];
-      }
-      if (geo.contains("landmarks_map") && out.georeferences.contains(geo["landmarks_map"]))
-        out.georeference = out.georeferences[geo["landmarks_map"]];
+    try {
+      ReadGeoSection(ParseJson(it->second), out);
+    } catch (const py::error_already_set& e) {  // not JSON, or a key missing
+      throw InputError(path, "section 'geo': " + std::string(e.what()));
+    } catch (const py::cast_error& e) {  // a value of another type
+      throw InputError(path, "section 'geo': " + std::string(e.what()));
     }
   }
   for (const auto& [map_id, camera] : contents.cameras) {

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -63,11 +64,25 @@ Trajectory TrajectoryFromArrays(const py::array_t<double>& timestamps, const py:
   const auto p = poses.unchecked<3>();
   Trajectory trajectory;
   for (py::ssize_t i = 0; i < timestamps.shape(0); ++i) {
-    Eigen::Matrix3x4d m;
-    for (int r = 0; r < 3; ++r) {
+    const std::string which = "poses[" + std::to_string(i) + "]";
+    if (!std::isfinite(t(i))) throw py::value_error("timestamps[" + std::to_string(i) + "] is not finite");
+    Eigen::Matrix4d m;
+    for (int r = 0; r < 4; ++r) {
       for (int c = 0; c < 4; ++c) m(r, c) = p(i, r, c);
     }
-    trajectory.push_back({t(i), Rigid3d::FromMatrix(m)});
+    if (!m.allFinite()) throw py::value_error(which + " holds a value that is not finite");
+    if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9))
+      throw py::value_error(which + ": the bottom row of a rigid transform is 0 0 0 1");
+    // A rotation, within what trajectory files are allowed (trajectory_io.cc); the pose is
+    // re-orthonormalized.
+    const Eigen::Matrix3d rotation = m.topLeftCorner<3, 3>();
+    const double deviation =
+        (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (deviation > 1e-2 || rotation.determinant() <= 0.0) {
+      throw py::value_error(which + ": its upper-left 3 x 3 is not a rotation (largest |R^T R - I| entry " +
+                            std::to_string(deviation) + ")");
+    }
+    trajectory.push_back({t(i), Rigid3d::FromMatrix(Eigen::Matrix3x4d(m.topRows<3>()))});
   }
   return trajectory;
 }
@@ -160,6 +175,10 @@ PYBIND11_MODULE(_semslam, m) {
                                                         py::cast<std::filesystem::path>(truth), times,
                                                         options, range));
         }
+        // A file's frame range and KITTI times have no meaning for arrays that carry their stamps.
+        if (frames || times)
+          throw py::value_error(
+              "frames and times apply to trajectory files, not to (timestamps, poses) arrays");
         return EvaluationDict(
             EvaluateTrajectory(TrajectoryOf(estimate, "estimate"), TrajectoryOf(truth, "truth"), options));
       },

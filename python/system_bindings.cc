@@ -3,11 +3,14 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "bindings.h"
+#include "semslam/core/error.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
 #include "semslam/semantics/segmenter.h"
@@ -24,6 +27,9 @@ py::dict SequenceCameraDict(const PinholeCamera& camera, const std::optional<Ste
   return d;
 }
 
+constexpr const char* kCameraKeys =
+    "camera: a dict with width, height (integers), fx, fy, cx, cy (numbers) and baseline for stereo";
+
 PinholeCamera CameraFromDict(const py::dict& d) {
   PinholeCamera camera;
   try {
@@ -33,11 +39,28 @@ PinholeCamera CameraFromDict(const py::dict& d) {
     camera.fy = d["fy"].cast<double>();
     camera.cx = d["cx"].cast<double>();
     camera.cy = d["cy"].cast<double>();
-  } catch (const py::error_already_set&) {
-    throw py::value_error("camera: a dict with width, height, fx, fy, cx, cy (and baseline for stereo)");
+  } catch (const py::error_already_set&) {  // a key missing
+    throw py::value_error(kCameraKeys);
+  } catch (const py::cast_error&) {  // a value of another type
+    throw py::value_error(kCameraKeys);
   }
   camera.Check();
   return camera;
+}
+
+std::optional<StereoRig> RigFromDict(const py::dict& d, const PinholeCamera& camera, SensorMode mode) {
+  if (!d.contains("baseline")) {
+    if (mode == SensorMode::kStereo) throw py::value_error("camera: stereo needs 'baseline' (metres)");
+    return std::nullopt;
+  }
+  StereoRig rig{camera, 0.0};
+  try {
+    rig.baseline = d["baseline"].cast<double>();
+  } catch (const py::cast_error&) {
+    throw py::value_error("camera: 'baseline' must be a number (metres)");
+  }
+  rig.Check();
+  return rig;
 }
 
 py::array_t<std::uint8_t> ImageArray(const cv::Mat& image) {
@@ -106,10 +129,9 @@ class PySystem {
     if (config) ApplySlamConfig(*config, &options);
     options.pacing = *parsed_pacing;
     if (vocabulary) options.vocabulary = *vocabulary;
-    const PinholeCamera pinhole = CameraFromDict(camera);
-    std::optional<StereoRig> rig;
-    if (camera.contains("baseline")) rig = StereoRig{pinhole, camera["baseline"].cast<double>()};
-    system_ = std::make_unique<SlamSystem>(options, pinhole, rig);
+    camera_ = CameraFromDict(camera);
+    stereo_ = options.mode == SensorMode::kStereo;
+    system_ = std::make_unique<SlamSystem>(options, camera_, RigFromDict(camera, camera_, options.mode));
     if (segmenter != "none") {
       SegmenterContext context;
       if (labels) context.truth_label_dir = *labels;
@@ -119,10 +141,27 @@ class PySystem {
 
   py::dict Process(const py::array& image, double timestamp, const py::object& right) {
     const cv::Mat left = MatFromArray(image);
-    const cv::Mat right_image = right.is_none() ? cv::Mat() : MatFromArray(right.cast<py::array>());
+    CheckImageSize(left, "image");
+    cv::Mat right_image;
+    if (stereo_) {
+      if (right.is_none())
+        throw py::value_error("right: a stereo system needs the right image of each frame");
+      right_image = MatFromArray(right.cast<py::array>());
+      CheckImageSize(right_image, "right");
+    } else if (!right.is_none()) {
+      throw py::value_error("right: a monocular system takes no right image (mode='stereo' does)");
+    }
+    if (!std::isfinite(timestamp)) throw py::value_error("timestamp must be finite");
     TrackingResult result;
     {
       py::gil_scoped_release release;  // tracking takes a while; the mapping threads never need Python
+      const std::lock_guard<std::mutex> lock(mutex_);
+      // Checked under the lock: two threads feeding one system must still give increasing times.
+      if (last_timestamp_ && !(timestamp > *last_timestamp_)) {
+        throw InvalidArgument("timestamp " + std::to_string(timestamp) +
+                              " does not follow the last frame's (" + std::to_string(*last_timestamp_) + ")");
+      }
+      last_timestamp_ = timestamp;
       result = system_->ProcessFrame(next_frame_++, timestamp, left, right_image);
     }
     py::dict d;
@@ -139,13 +178,20 @@ class PySystem {
 
   void Finish() {
     py::gil_scoped_release release;
+    const std::lock_guard<std::mutex> lock(mutex_);
     system_->Finish();
   }
 
   py::tuple Trajectory() const {
     std::vector<Rigid3d> poses;
     std::vector<double> stamps;
-    for (const StampedPose& p : system_->FrameTrajectory()) {
+    semslam::Trajectory trajectory;
+    {
+      py::gil_scoped_release release;
+      const std::lock_guard<std::mutex> lock(mutex_);
+      trajectory = system_->FrameTrajectory();
+    }
+    for (const StampedPose& p : trajectory) {
       stamps.push_back(p.timestamp);
       poses.push_back(p.world_from_camera);
     }
@@ -154,7 +200,12 @@ class PySystem {
   }
 
   py::dict Statistics() const {
-    const SlamStatistics s = system_->Statistics();
+    SlamStatistics s;
+    {
+      py::gil_scoped_release release;
+      const std::lock_guard<std::mutex> lock(mutex_);
+      s = system_->Statistics();
+    }
     py::dict d;
     d["frames"] = s.frames;
     d["tracked"] = s.tracked;
@@ -166,11 +217,31 @@ class PySystem {
     return d;
   }
 
-  void SaveMap(const std::filesystem::path& path) const { system_->SaveMap(path); }
+  void SaveMap(const std::filesystem::path& path) const {
+    if (path.empty()) throw py::value_error("save_map: an empty path");
+    if (std::filesystem::is_directory(path))
+      throw py::value_error("save_map: " + path.string() + " is a folder; give the map file's path");
+    py::gil_scoped_release release;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    system_->SaveMap(path);
+  }
 
  private:
+  void CheckImageSize(const cv::Mat& image, const char* what) const {
+    if (image.cols != camera_.width || image.rows != camera_.height) {
+      throw py::value_error(std::string(what) + ": " + std::to_string(image.cols) + " x " +
+                            std::to_string(image.rows) + " pixels, but the camera is " +
+                            std::to_string(camera_.width) + " x " + std::to_string(camera_.height));
+    }
+  }
+
+  PinholeCamera camera_;
+  bool stereo_ = false;
   std::unique_ptr<SlamSystem> system_;
+  // One caller at a time: Python threads may share a system, SlamSystem's calls may not overlap.
+  mutable std::mutex mutex_;
   std::uint64_t next_frame_ = 0;
+  std::optional<double> last_timestamp_;
 };
 
 }  // namespace

@@ -143,6 +143,90 @@ class SemslamModuleTest(unittest.TestCase):
             semslam.load_map(bad)
         with self.assertRaises(ValueError):
             semslam.System({"width": 10}, mode="mono")
+        with self.assertRaisesRegex(ValueError, "integers"):
+            semslam.System({"width": 1241.5, "height": 376, "fx": "abc", "fy": 1, "cx": 1, "cy": 1})
+        with self.assertRaisesRegex(ValueError, "empty path"):
+            semslam.load_map("")
+
+    def test_system_refuses_frames_it_cannot_use(self):
+        sequence = semslam.open_sequence(self.sequence)
+        camera = sequence.camera
+        mono_camera = {k: v for k, v in camera.items() if k != "baseline"}
+        with self.assertRaisesRegex(ValueError, "baseline"):
+            semslam.System(mono_camera, mode="stereo")
+        with self.assertRaisesRegex(ValueError, "baseline"):
+            semslam.System(dict(camera, baseline=-0.5), mode="stereo")
+        with self.assertRaisesRegex(ValueError, "number"):
+            semslam.System(dict(camera, baseline="x"), mode="stereo")
+        system = semslam.System(mono_camera, mode="mono")
+        image = sequence.image(0, 0)
+        with self.assertRaisesRegex(ValueError, "10 x 10 pixels, but the camera is"):
+            system.process(np.zeros((10, 10), np.uint8), 0.0)
+        with self.assertRaisesRegex(ValueError, "monocular"):
+            system.process(image, 0.0, right=image)
+        with self.assertRaisesRegex(ValueError, "finite"):
+            system.process(image, float("nan"))
+        system.process(image, 1.0)
+        with self.assertRaisesRegex(ValueError, "does not follow"):
+            system.process(image, 1.0)
+        self.assertEqual(system.statistics()["frames"], 1)  # the refused frames were not counted
+        with self.assertRaisesRegex(ValueError, "folder"):
+            system.save_map(self.tmp)
+        stereo = semslam.System(camera, mode="stereo")
+        with self.assertRaisesRegex(ValueError, "right image"):
+            stereo.process(image, 0.0)
+        with self.assertRaisesRegex(ValueError, "right: 10 x 10"):
+            stereo.process(image, 0.0, right=np.zeros((10, 10), np.uint8))
+
+    def test_threads_sharing_a_system_take_turns(self):
+        import threading
+        sequence = semslam.open_sequence(self.sequence)
+        camera = {k: v for k, v in sequence.camera.items() if k != "baseline"}
+        system = semslam.System(camera, mode="mono")
+        frames = list(range(40))
+        lock = threading.Lock()  # hands out frames in order; the system serializes the calls themselves
+        errors = []
+
+        def feed():
+            while True:
+                with lock:
+                    if not frames:
+                        return
+                    i = frames.pop(0)
+                    image, stamp = sequence.image(i, 0), sequence.timestamp(i)
+                try:
+                    system.process(image, stamp)
+                except ValueError as e:  # a later frame overtook this one: refused, not a crash
+                    errors.append(str(e))
+                system.statistics()
+
+        threads = [threading.Thread(target=feed) for _ in range(2)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        system.finish()
+        self.assertTrue(all("does not follow" in e for e in errors), errors)
+        self.assertEqual(system.statistics()["frames"] + len(errors), 40)
+
+    def test_evaluate_refuses_arrays_that_are_not_poses(self):
+        stamps, poses = semslam.read_trajectory(os.path.join(self.out, "trajectory.tum"))
+        with self.assertRaisesRegex(ValueError, "apply to trajectory files"):
+            semslam.evaluate((stamps, poses), (stamps, poses), frames=(0, 3))
+        with self.assertRaisesRegex(ValueError, "apply to trajectory files"):
+            semslam.evaluate((stamps, poses), (stamps, poses), times=os.path.join(self.sequence, "times.txt"))
+        bad = poses.copy()
+        bad[2, :3, :3] *= 2.0
+        with self.assertRaisesRegex(ValueError, r"poses\[2\].*not a rotation"):
+            semslam.evaluate((stamps, bad), (stamps, poses))
+        bad = poses.copy()
+        bad[1, 3, 0] = 5.0
+        with self.assertRaisesRegex(ValueError, r"poses\[1\].*bottom row"):
+            semslam.evaluate((stamps, bad), (stamps, poses))
+        bad = poses.copy()
+        bad[0, 0, 3] = np.nan
+        with self.assertRaisesRegex(ValueError, r"poses\[0\].*not finite"):
+            semslam.evaluate((stamps, bad), (stamps, poses))
 
 
 if __name__ == "__main__":
