@@ -5,7 +5,8 @@ tree of `semslam merge` tasks (groups of up to --merge-group maps, the outputs m
 DIR/city/ (a run folder as `semslam merge` writes it). Intermediate merges go to DIR/merges/ and are removed once the
 city is done. Every output is written to a temporary folder and renamed into place when its command succeeded; an
 output already there, made by the same command, is not made again, so running the same command after a crash or
-Ctrl-C resumes. Dask runs a task again when its worker dies. OUT/.city.lock keeps a second command off OUT. See README.md ("Many drives, one city map") and docs/formats.md (city manifest)."""
+Ctrl-C resumes. Dask runs a task again when its worker dies. OUT/.city.lock keeps a second command off OUT. See
+README.md ("Many drives, one city map") and docs/formats.md (city manifest)."""
 
 import argparse
 import contextlib

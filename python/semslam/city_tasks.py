@@ -17,7 +17,8 @@ from .city_plan import Drive
 
 EVENT_TOPIC = "semslam.city"  # tasks report that they started on this Dask event topic
 RUN_JSON = "run.json"
-LOCK_FILE = ".semslam.lock"  # every semslam command leaves it in its output folder (src/semslam/system/run_output_dir.h)
+# Every semslam command leaves it in its output folder (src/semslam/system/run_output_dir.h).
+LOCK_FILE = ".semslam.lock"
 FINISHED = ("complete", "ok")  # run.json "status" of a finished run ("complete") and merge ("ok")
 RETRIES = 2  # a command that failed in a way that may not repeat is tried this many more times
 REPEATING_EXIT_CODES = (1, 2)  # semslam's "failed" and "bad input": the same command fails again

@@ -260,7 +260,8 @@ command="\\"$0\\""
 for arg in "$@"; do command="$command, \\"$arg\\""; done
 while [ $# -gt 0 ]; do [ "$1" = --out ] && out="$2"; shift; done
 mkdir -p "$out" && echo "pid $$, semslam" > "$out/.semslam.lock"
-echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, "provenance": {"command": ['"$command"']}}' > "$out/run.json"
+echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, '\\
+'"provenance": {"command": ['"$command"']}}' > "$out/run.json"
 """)
         os.chmod(path, 0o755)
         return path
@@ -274,7 +275,8 @@ echo '{"status": "ok", "frames": 7, "maps": {"count": 1, "sessions": [{}, {}]}, 
         drives_dir = self.path("out", "drives")
         drive = Drive("d1", self.path("seq"))
         result = city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])
-        self.assertEqual((result["frames"], result["reused"], result["path"]), (7, False, self.path(drives_dir, "d1")))
+        self.assertEqual((result["frames"], result["reused"], result["path"]),
+                         (7, False, self.path(drives_dir, "d1")))
         self.assertTrue(city_tasks.run_drive(drive, drives_dir, fake, ["--mode", "stereo"])["reused"])
         self.assertEqual(self.calls(), ["run"])
         other = city_tasks.run_drive(Drive("d0", self.path("seq0")), drives_dir, fake, [])
