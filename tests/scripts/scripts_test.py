@@ -1,0 +1,138 @@
+#!/usr/bin/env python3
+"""The user-facing scripts of scripts/ with bad or unusual input: unknown options, relative paths, Ctrl-C. Each
+script runs against fakes (a fake semslam, fake fuzz targets, fake Slurm daemons) in a temporary folder: no build,
+no SLAM run, no root, standard library only."""
+
+import os
+import signal
+import stat
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+import unittest
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPTS = os.path.join(REPO, "scripts")
+
+
+def write_executable(path, text):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        f.write(textwrap.dedent(text).lstrip())
+    os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
+    return path
+
+
+def run(command, cwd=None, env=None, timeout=60):
+    return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
+def processes_with(marker):
+    """Pids of the processes whose command line holds `marker` (a temporary folder's name)."""
+    found = []
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            with open("/proc/%s/cmdline" % pid, "rb") as f:
+                if marker.encode() in f.read():
+                    found.append(int(pid))
+        except OSError:
+            pass
+    return found
+
+
+def interrupt_after(command, seconds, env=None, cwd=None, ready=None, timeout=30):
+    """Runs the command in a session of its own and sends SIGINT to its whole process group (as Ctrl-C in a
+    terminal does) after `seconds`, or once the file `ready` exists; returns (exit code, stdout, stderr, seconds
+    from the signal to the exit)."""
+    p = subprocess.Popen(command, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
+    deadline = time.monotonic() + timeout
+    time.sleep(seconds)
+    while ready and not os.path.exists(ready) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(p.pid, signal.SIGINT)
+    signalled = time.monotonic()
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        out, err = p.communicate()
+        raise AssertionError("%s did not stop within %d s of SIGINT: %s" % (command[0], timeout, err))
+    return p.returncode, out, err, time.monotonic() - signalled
+
+
+class Fuzz(unittest.TestCase):
+    """scripts/fuzz.sh with fake libFuzzer targets (FUZZ_BUILD_DIR)."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="fuzz-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.build = os.path.join(self.tmp, "targets")
+        names = sorted(os.listdir(os.path.join(REPO, "fuzz", "corpus")))
+        for name in names:
+            # As libFuzzer: the statistics at the end; SIGINT or SIGTERM end it with exit code 72.
+            write_executable(os.path.join(self.build, "fuzz_" + name), """
+                #!/bin/bash
+                trap 'kill $sleeper 2>/dev/null; echo "libFuzzer: run interrupted; exiting"; exit 72' INT TERM
+                touch "%s/started-$(basename "$0")"
+                sleep "${FAKE_FUZZ_SLEEP:-0}" & sleeper=$!
+                wait $sleeper
+                echo "stat::number_of_executed_units: 12"
+                """ % self.tmp)
+        self.env = dict(os.environ, FUZZ_BUILD_DIR=self.build, FUZZ_SECONDS="1",
+                        FUZZ_ARTIFACTS=os.path.join(self.tmp, "artifacts"))
+
+    def test_every_target_runs(self):
+        r = run([os.path.join(SCRIPTS, "fuzz.sh")], env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("executions in all", r.stdout)
+
+    def test_relative_build_folder_is_the_callers(self):
+        env = dict(self.env, FUZZ_BUILD_DIR="targets", FUZZ_ARTIFACTS="artifacts")
+        r = run([os.path.join(SCRIPTS, "fuzz.sh")], env=env, cwd=self.tmp)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("artifacts in %s/artifacts" % self.tmp, r.stdout)
+
+    def test_seconds_that_would_mean_no_limit_are_refused(self):
+        for seconds in ("0", "five", "-1"):
+            r = run([os.path.join(SCRIPTS, "fuzz.sh")], env=dict(self.env, FUZZ_SECONDS=seconds))
+            self.assertEqual(r.returncode, 2, seconds)
+            self.assertIn("FUZZ_SECONDS", r.stderr)
+            self.assertFalse([f for f in os.listdir(self.tmp) if f.startswith("started-")])
+
+    def test_arguments_are_refused(self):
+        r = run([os.path.join(SCRIPTS, "fuzz.sh"), "--help"], env=self.env)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("usage", r.stderr)
+
+    def test_ctrl_c_stops_at_once_without_blaming_the_target(self):
+        env = dict(self.env, FAKE_FUZZ_SLEEP="30")
+        code, out, err, seconds = interrupt_after([os.path.join(SCRIPTS, "fuzz.sh")], 0.2, env=env,
+                                                 ready=os.path.join(self.tmp, "started-fuzz_camera_yaml"))
+        self.assertEqual(code, 130, err)
+        self.assertIn("fuzz: interrupted", err)
+        self.assertNotIn("FAILED", err)
+        self.assertLess(seconds, 5)
+        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual([f for f in os.listdir(self.tmp) if f.startswith("started-")],
+                         ["started-fuzz_camera_yaml"])
+
+    def test_a_signal_to_the_script_alone_stops_its_target(self):
+        env = dict(self.env, FAKE_FUZZ_SLEEP="30")
+        p = subprocess.Popen([os.path.join(SCRIPTS, "fuzz.sh")], env=env, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+        ready = os.path.join(self.tmp, "started-fuzz_camera_yaml")
+        while not os.path.exists(ready):
+            time.sleep(0.05)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=10)
+        self.assertEqual(p.returncode, 143, err)
+        self.assertEqual(processes_with(self.tmp), [])
+
+
+if __name__ == "__main__":
+    unittest.main()
