@@ -524,16 +524,30 @@ def parse_args(argv):
         args.busy_runs = 0 if args.quick else 1
     if args.runs < 1 or args.busy_runs < 0:
         p.error("--runs must be at least 1 and --busy-runs at least 0")
+    if args.cases is not None:
+        try:
+            re.compile(args.cases)
+        except re.error as e:
+            p.error("--cases %r is not a regular expression: %s" % (args.cases, e))
     return args
+
+
+def load_results(path):
+    """A results.json for --markdown; SystemExit naming the file when it cannot be read or is not one."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            results = json.load(f)
+    except (OSError, ValueError) as e:
+        raise SystemExit("benchmark: cannot read %s: %s" % (path, e))
+    if not isinstance(results, dict) or not isinstance(results.get("cases"), dict):
+        raise SystemExit("benchmark: %s is not a benchmark's results.json (no \"cases\")" % path)
+    return results
 
 
 def main(argv):
     args = parse_args(argv)
     if args.markdown:
-        loaded = []
-        for path in args.markdown:
-            with open(path, encoding="utf-8") as f:
-                loaded.append((path, json.load(f)))
+        loaded = [(path, load_results(path)) for path in args.markdown]
         merged = merge_results(loaded)
         judge_by_todays_bars(merged)
         if os.path.exists(args.baseline):
@@ -557,7 +571,7 @@ def main(argv):
               "sequences the first time adds to it)" % (len(cases), len(plan),
                                                          minutes(sum(estimate(c, v) for c, v, _, _ in plan))))
         return 0
-    if not os.access(args.bin, os.X_OK):
+    if not os.path.isfile(args.bin) or not os.access(args.bin, os.X_OK):
         print("benchmark: no semslam binary at %s (scripts/benchmark.sh builds it)" % args.bin, file=sys.stderr)
         return 2
     command_text = os.environ.get("SEMSLAM_BENCH_COMMAND") or "scripts/benchmark.py " + " ".join(

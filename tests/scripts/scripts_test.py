@@ -3,6 +3,7 @@
 script runs against fakes (a fake semslam, fake fuzz targets, fake Slurm daemons) in a temporary folder: no build,
 no SLAM run, no root, standard library only."""
 
+import json
 import os
 import signal
 import stat
@@ -42,6 +43,36 @@ def processes_with(marker):
         except OSError:
             pass
     return found
+
+
+def fake_checkout(tmp, *scripts):
+    """A checkout holding copies of the given scripts and a scripts/build.sh, scripts/install-deps.sh that only
+    note they ran (in tmp/ran-build, tmp/ran-install-deps): a script that would build does nothing harmful."""
+    root = os.path.join(tmp, "checkout")
+    for name in scripts:
+        with open(os.path.join(SCRIPTS, name)) as f:
+            write_executable(os.path.join(root, "scripts", name), f.read())
+    for name in ("build", "install-deps"):
+        write_executable(os.path.join(root, "scripts", name + ".sh"), """
+            #!/bin/bash
+            echo "$0 $*" >>"%s/ran-%s"
+            """ % (tmp, name))
+    return root
+
+
+def fake_semslam(path, body=""):
+    """A fake semslam: `synth --out DIR` makes a sequence folder; the other commands run `body` (bash)."""
+    return write_executable(path, """
+        #!/bin/bash
+        echo "$*" >>"$0.calls"
+        if [ "$1" = synth ]; then
+          while [ $# -gt 0 ]; do [ "$1" = --out ] && out=$2; shift; done
+          mkdir -p "$out/sequences/00/image_0" "$out/oxts" "$out/poses"
+          echo "name,lat,lon" >"$out/landmarks.csv"
+          exit 0
+        fi
+        %s
+        """ % body)
 
 
 def interrupt_after(command, seconds, env=None, cwd=None, ready=None, timeout=30):
@@ -132,6 +163,102 @@ class Fuzz(unittest.TestCase):
         _, err = p.communicate(timeout=10)
         self.assertEqual(p.returncode, 143, err)
         self.assertEqual(processes_with(self.tmp), [])
+
+
+class CheckRobustness(unittest.TestCase):
+    """scripts/check-robustness.sh, a copy in a fake checkout, with a fake semslam."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="robustness-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.root = fake_checkout(self.tmp, "check-robustness.sh")
+        self.script = os.path.join(self.root, "scripts", "check-robustness.sh")
+        # `run` in the background takes its time and, as there, ignores the SIGINT a non-interactive shell's
+        # background job inherits ignored.
+        self.bin = fake_semslam(os.path.join(self.tmp, "bin", "semslam"),
+                               'touch "$0.running"; exec -a "$0-run" sleep 30')
+        self.env = dict(os.environ, TMPDIR=os.path.join(self.tmp, "t"))
+        os.makedirs(self.env["TMPDIR"])
+
+    def test_a_binary_given_relative_to_the_callers_folder(self):
+        write_executable(self.bin, "#!/bin/bash\nexit 3\n")  # synth fails: the script stops there
+        r = run([self.script, "bin/semslam"], cwd=self.tmp, env=self.env)
+        self.assertIn("synth failed", r.stdout)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-build")))
+
+    def test_a_missing_binary_given_is_an_error_not_a_build(self):
+        r = run([self.script, "no/such/semslam"], cwd=self.tmp, env=self.env)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("no/such/semslam is not an executable semslam binary", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-build")))
+
+    def test_options_get_the_usage(self):
+        for args in (["--help"], [self.bin, "extra"]):
+            r = run([self.script] + args, env=self.env)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn("usage", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-build")))
+
+    def test_ctrl_c_leaves_no_run_and_no_folder(self):
+        code, out, err, seconds = interrupt_after([self.script, self.bin], 0, env=self.env,
+                                                  ready=self.bin + ".running")
+        self.assertEqual(code, 130, out + err)
+        self.assertIn("check-robustness: interrupted", err)
+        self.assertLess(seconds, 5)
+        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(os.listdir(self.env["TMPDIR"]), [])
+
+
+class Benchmark(unittest.TestCase):
+    """scripts/benchmark.sh in a fake checkout: a fake cmake "builds" a fake semslam that fails every run."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="benchmark-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        names = [n for n in os.listdir(SCRIPTS) if n.startswith("bench") and n.endswith((".py", ".sh"))]
+        self.root = fake_checkout(self.tmp, *names)
+        write_executable(os.path.join(self.tmp, "path", "cmake"), """
+            #!/bin/bash
+            echo "cmake $*" >>"%s/ran-cmake"
+            mkdir -p build/release/bin
+            printf '#!/bin/bash\\nexit 1\\n' >build/release/bin/semslam
+            chmod +x build/release/bin/semslam
+            """ % self.tmp)
+        self.cwd = os.path.join(self.tmp, "cwd")
+        os.makedirs(self.cwd)
+        self.env = dict(os.environ, PATH=os.path.join(self.tmp, "path") + ":" + os.environ["PATH"],
+                        SEMSLAM_BENCH_CACHE=os.path.join(self.tmp, "cache"))
+        self.script = os.path.join(self.root, "scripts", "benchmark.sh")
+
+    def test_a_mistyped_option_costs_no_build(self):
+        for args in (["--runz", "1"], ["--cases", "("], ["--runs", "0"]):
+            r = run([self.script] + args, cwd=self.cwd, env=self.env)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn("error:", r.stderr)
+            self.assertNotIn("Traceback", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-cmake")))
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-install-deps")))
+
+    def test_out_relative_to_the_callers_folder(self):
+        r = run([self.script, "--cases", "^demo$", "--runs", "1", "--out", "my out"], cwd=self.cwd, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(self.cwd, "my out", "results.json")) as f:
+            results = json.load(f)
+        self.assertEqual(results["command"], "scripts/benchmark.sh --cases \\^demo\\$ --runs 1 --out my\\ out")
+        self.assertEqual(results["cases"]["demo"]["status"], "failed")
+        self.assertEqual(sorted(os.listdir(self.root)), ["build", "scripts"])
+
+    def test_markdown_of_a_results_file_relative_to_the_callers_folder(self):
+        r = run([self.script, "--cases", "^demo$", "--runs", "1", "--out", "out"], cwd=self.cwd, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = run([self.script, "--markdown", "out/results.json"], cwd=self.cwd, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("demo", r.stdout)
+        for bad, why in (("missing.json", "No such file"), ("out/results.md", "Expecting value")):
+            r = run([self.script, "--markdown", bad], cwd=self.cwd, env=self.env)
+            self.assertEqual(r.returncode, 1, bad)
+            self.assertIn("benchmark: cannot read %s" % bad, r.stderr)
+            self.assertIn(why, r.stderr)
 
 
 if __name__ == "__main__":
