@@ -13,16 +13,45 @@
 #   a zero-byte frame           -> skipped with one warning; the run finishes with its work saved
 # Usage: scripts/check-robustness.sh [SEMSLAM_BINARY]   (default build/release/bin/semslam, built if missing)
 set -uo pipefail
-cd "$(dirname "$0")/.."
-bin="${1:-build/release/bin/semslam}"
-if [ ! -x "$bin" ]; then
-  ./scripts/build.sh >/dev/null || exit 1
+usage="usage: scripts/check-robustness.sh [SEMSLAM_BINARY]   (default build/release/bin/semslam, built if missing)"
+if [ $# -gt 1 ] || [[ ${1:-} == -* ]]; then
+  echo "$usage" >&2
+  exit 2
 fi
-bin="$(realpath "$bin")"
+if [ $# -eq 1 ]; then
+  # A binary given is taken relative to where the script was started, and never built: a mistyped path is an
+  # error, not a build of the release preset.
+  bin="$(realpath -m -- "$1")"
+  if [ ! -x "$bin" ] || [ -d "$bin" ]; then
+    echo "check-robustness: $1 is not an executable semslam binary" >&2
+    exit 2
+  fi
+  cd "$(dirname "$0")/.."
+else
+  cd "$(dirname "$0")/.."
+  bin="$PWD/build/release/bin/semslam"
+  if [ ! -x "$bin" ]; then
+    ./scripts/build.sh >/dev/null || exit 1
+  fi
+fi
+passed=0 failed=0
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
+# Ctrl-C or a SIGTERM: the run in the background (if any) is stopped before its folder is removed, none is left
+# running after the script.
+pid=
+on_signal() {
+  trap '' INT TERM
+  if [ -n "$pid" ]; then
+    kill -KILL "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+  fi
+  echo "check-robustness: interrupted ($passed passed, $failed failed so far)" >&2
+  exit "$1"
+}
+trap 'on_signal 130' INT
+trap 'on_signal 143' TERM
 py=/usr/bin/python3
-passed=0 failed=0
 check() {  # check NAME CONDITION-EXIT-STATUS
   if [ "$2" -eq 0 ]; then
     echo "PASS $1"
@@ -46,6 +75,7 @@ sleep 6
 kill -INT "$pid"
 wait "$pid"
 status=$?
+pid=
 frames="$(json "$work/int/run.json" 'd["frames"]' 2>/dev/null || echo 0)"
 lines="$(poses "$work/int/trajectory.tum")"
 echo "  SIGINT: exit $status, run.json status $(json "$work/int/run.json" 'd["status"]' 2>/dev/null), $frames of 200 frames, $lines poses"
@@ -65,6 +95,7 @@ for _ in $(seq 100); do grep -q "stopping after" "$work/twice.err" && break; sle
 kill -TERM "$pid"
 wait "$pid"
 status=$?
+pid=
 grep -q "quitting at once" "$work/twice.err"
 check "a second signal quits at once (exit $status)" $?
 echo partial >"$work/twice/.run.json.tmp999999999.0"
@@ -98,6 +129,7 @@ sleep 2
 status=$?
 kill -KILL "$pid" 2>/dev/null
 wait "$pid" 2>/dev/null
+pid=
 [ "$status" -ne 0 ] && grep -q "another semslam command" "$work/two.err"
 check "a second run into the same --out is refused ($(cat "$work/two.err"))" $?
 

@@ -209,6 +209,49 @@ class CheckRobustness(unittest.TestCase):
         self.assertEqual(os.listdir(self.env["TMPDIR"]), [])
 
 
+def fake_cmake(tmp):
+    """A PATH whose cmake "builds" build/release/bin/semslam: a fake that notes its arguments in
+    tmp/semslam-calls and exits $FAKE_SEMSLAM_EXIT (0)."""
+    write_executable(os.path.join(tmp, "path", "cmake"), """
+        #!/bin/bash
+        echo "cmake $*" >>"%s/ran-cmake"
+        mkdir -p build/release/bin
+        printf '#!/bin/bash\\necho "$*" >>%s/semslam-calls\\nexit ${FAKE_SEMSLAM_EXIT:-0}\\n' \\
+          >build/release/bin/semslam
+        chmod +x build/release/bin/semslam
+        """ % (tmp, tmp))
+    return os.path.join(tmp, "path") + ":" + os.environ["PATH"]
+
+
+class Demo(unittest.TestCase):
+    """scripts/demo.sh in a fake checkout with a fake cmake: where its outputs go."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="demo-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.root = fake_checkout(self.tmp, "demo.sh")
+        self.env = dict(os.environ, PATH=fake_cmake(self.tmp), CCACHE_DIR=os.path.join(self.tmp, "ccache"))
+        self.cwd = os.path.join(self.tmp, "cwd")
+        os.makedirs(self.cwd)
+
+    def demo(self, *args):
+        r = run([os.path.join(self.root, "scripts", "demo.sh")] + list(args), cwd=self.cwd, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(self.tmp, "semslam-calls")) as f:
+            call = f.read().splitlines()[-1]
+        return call
+
+    def test_outputs_in_the_checkout_by_default(self):
+        self.assertEqual(self.demo(), "demo --out out/demo")
+        self.assertEqual(self.demo(""), "demo --out out/demo")
+
+    def test_a_folder_given_relative_to_the_callers_folder(self):
+        self.assertEqual(self.demo("my demo", "--frames", "100"), "demo --out %s/my demo --frames 100" % self.cwd)
+
+    def test_options_alone_go_to_semslam_demo(self):
+        self.assertEqual(self.demo("--frames", "100"), "demo --out out/demo --frames 100")
+
+
 class Benchmark(unittest.TestCase):
     """scripts/benchmark.sh in a fake checkout: a fake cmake "builds" a fake semslam that fails every run."""
 
@@ -217,16 +260,10 @@ class Benchmark(unittest.TestCase):
         self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
         names = [n for n in os.listdir(SCRIPTS) if n.startswith("bench") and n.endswith((".py", ".sh"))]
         self.root = fake_checkout(self.tmp, *names)
-        write_executable(os.path.join(self.tmp, "path", "cmake"), """
-            #!/bin/bash
-            echo "cmake $*" >>"%s/ran-cmake"
-            mkdir -p build/release/bin
-            printf '#!/bin/bash\\nexit 1\\n' >build/release/bin/semslam
-            chmod +x build/release/bin/semslam
-            """ % self.tmp)
         self.cwd = os.path.join(self.tmp, "cwd")
         os.makedirs(self.cwd)
-        self.env = dict(os.environ, PATH=os.path.join(self.tmp, "path") + ":" + os.environ["PATH"],
+        # The fake semslam notes its calls and fails: every case fails at once.
+        self.env = dict(os.environ, PATH=fake_cmake(self.tmp), FAKE_SEMSLAM_EXIT="1",
                         SEMSLAM_BENCH_CACHE=os.path.join(self.tmp, "cache"))
         self.script = os.path.join(self.root, "scripts", "benchmark.sh")
 
