@@ -6,6 +6,7 @@ no SLAM run, no root, standard library only."""
 import json
 import os
 import signal
+import socket
 import stat
 import subprocess
 import sys
@@ -296,6 +297,97 @@ class Benchmark(unittest.TestCase):
             self.assertEqual(r.returncode, 1, bad)
             self.assertIn("benchmark: cannot read %s" % bad, r.stderr)
             self.assertIn(why, r.stderr)
+
+
+class SlurmLocal(unittest.TestCase):
+    """scripts/slurm-local.sh with fake munged and Slurm daemons (perl processes whose command line is the
+    daemon's), a fake sudo and `id -u` 1000: the real daemons and /run/munge are never touched."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="slurm-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.addCleanup(lambda: [os.kill(pid, signal.SIGKILL) for pid in processes_with(self.tmp)])
+        fake = os.path.join(self.tmp, "fake")
+        # A daemon: a detached perl process whose command line is "NAME ARGUMENTS" (pgrep finds it so).
+        daemon = ('echo "%s $*" >>' + fake + '/calls\n'
+                  'setsid perl -e \'$0 = join(" ", @ARGV); sleep 300\' %s "$@" </dev/null >/dev/null 2>&1 &\n')
+        tools = {
+            "id": '[ "$1" = -u ] && { echo 1000; exit 0; }; exec /usr/bin/id "$@"',
+            # The /run/munge steps are the machine's: not done.
+            "sudo": 'case "$*" in *" /run/munge") exit 0 ;; esac; exec "$@"',
+            "runuser": 'while [ "$1" != -- ]; do shift; done; shift; exec "$@"',
+            "munged": ('if [ "$1" = --stop ]; then\n'
+                       '  echo "munged --stop" >>{0}/calls; kill "$(cat {0}/munged.pid)"; rm {0}/munged.pid; exit\n'
+                       'fi\n'.format(fake) + daemon % ("munged", "munged " + fake) + "echo $! >%s/munged.pid" % fake),
+            "munge": '[ -n "${FAKE_MUNGE_OK:-}" ] || [ -e %s/munged.pid ]' % fake,
+            "unmunge": 'cat >/dev/null; [ -n "${FAKE_MUNGE_OK:-}" ] || [ -e %s/munged.pid ]' % fake,
+            "slurmctld": daemon % ("slurmctld", "slurmctld"),
+            "slurmd": '[ -z "${FAKE_SLURMD_DIES:-}" ] || exit 0\n' + daemon % ("slurmd", "slurmd"),
+            # Idle once both daemons of $SLURM_CONF run.
+            "sinfo": 'echo "sinfo $*" >>%s/calls\n'
+                     '[ "$(ps -eo args | grep -cxF -e "slurmctld -f $SLURM_CONF" -e "slurmd -f $SLURM_CONF")" = 2 ] '
+                     '&& echo "local up 1 idle $(hostname -s)"' % fake,
+        }
+        for name, body in tools.items():
+            write_executable(os.path.join(fake, name), "#!/bin/bash\n" + body + "\n")
+        self.fake = fake
+        self.env = dict(os.environ, PATH=fake + ":" + os.environ["PATH"])
+        self.script = os.path.join(SCRIPTS, "slurm-local.sh")
+
+    def calls(self):
+        with open(os.path.join(self.fake, "calls")) as f:
+            return f.read()
+
+    def test_start_and_stop_in_a_relative_folder_with_regex_characters(self):
+        held = socket.socket()
+        try:
+            held.bind(("127.0.0.1", 6917))
+            held.listen()
+        except OSError:
+            pass  # taken already: the script must skip it all the same
+        self.addCleanup(held.close)
+        r = run([self.script, "start", "slurm+1.d"], cwd=self.tmp, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        conf = os.path.join(self.tmp, "slurm+1.d", "slurm.conf")
+        self.assertIn("export SLURM_CONF=%s" % conf, r.stdout)
+        with open(conf) as f:
+            settings = dict(line.split("=", 1) for line in f.read().splitlines())
+        ports = {int(settings["SlurmctldPort"]), int(settings["SlurmdPort"])}
+        self.assertEqual(len(ports), 2)
+        self.assertFalse(ports & {6817, 6818, 6917}, ports)
+        self.assertIn("--partition=local", self.calls())
+        self.assertEqual(len(processes_with(self.tmp)), 3)  # munged, slurmctld, slurmd
+        # Started again: the first daemons are found (their folder's name has a '+') and stopped first.
+        r = run([self.script, "start", conf[:-len("/slurm.conf")]], env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(len(processes_with(self.tmp)), 3)
+        r = run([self.script, "stop", "slurm+1.d"], cwd=self.tmp, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(processes_with(self.tmp), [])
+        self.assertIn("munged --stop", self.calls())
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "slurm+1.d", "munged.started")))
+
+    def test_a_running_munged_is_left_alone(self):
+        env = dict(self.env, FAKE_MUNGE_OK="1")
+        dir = os.path.join(self.tmp, "cluster")
+        self.assertEqual(run([self.script, "start", dir], env=env).returncode, 0)
+        self.assertEqual(run([self.script, "stop", dir], env=env).returncode, 0)
+        self.assertNotIn("munged", self.calls())
+        self.assertEqual(processes_with(self.tmp), [])
+
+    def test_a_daemon_that_ends_is_reported_at_once_and_nothing_is_left(self):
+        start = time.monotonic()
+        r = run([self.script, "start", os.path.join(self.tmp, "cluster")], env=dict(self.env, FAKE_SLURMD_DIES="1"))
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("a daemon ended while starting", r.stderr)
+        self.assertLess(time.monotonic() - start, 20)
+        self.assertEqual(processes_with(self.tmp), [])
+
+    def test_bad_arguments(self):
+        for args in (["start", os.path.join(self.tmp, "a b")], ["stop", "x", "y"], ["restart"], []):
+            r = run([self.script] + args, env=self.env)
+            self.assertEqual(r.returncode, 2, args)
+        self.assertFalse(os.path.exists(os.path.join(self.fake, "calls")))
 
 
 if __name__ == "__main__":
