@@ -7,20 +7,27 @@ import argparse
 import csv
 import json
 import math
+import os
+import sys
+import tempfile
 
 
 def read_rows(path):
     rows = []
     with open(path, newline="") as f:
-        for row in csv.DictReader(f):
+        for number, row in enumerate(csv.DictReader(f), 2):
             if not row.get("rss_mib"):
                 continue
-            rows.append({
-                "frame": int(row["frame"]),
-                "rss": float(row["rss_mib"]),
-                "keyframes": int(row["keyframes"]) if row.get("keyframes") else None,
-                "points": int(row["map_points"]) if row.get("map_points") else None,
-            })
+            try:
+                rows.append({
+                    "frame": int(row["frame"]),
+                    "rss": float(row["rss_mib"]),
+                    "keyframes": int(row["keyframes"]) if row.get("keyframes") else None,
+                    "points": int(row["map_points"]) if row.get("map_points") else None,
+                })
+            except (KeyError, TypeError, ValueError) as e:
+                raise SystemExit(f"{path}:{number}: not a tracking.csv row (frame, rss_mib, keyframes, map_points): "
+                                 f"{type(e).__name__} {e}")
     return rows
 
 
@@ -34,7 +41,10 @@ def read_kitti_poses(path):
                 continue
             if len(v) != 12:
                 raise SystemExit(f"{path}:{number}: expected 12 numbers, found {len(v)}")
-            m = [float(x) for x in v]
+            try:
+                m = [float(x) for x in v]
+            except ValueError as e:
+                raise SystemExit(f"{path}:{number}: {e}")
             centres.append((m[3], m[7], m[11]))
             directions.append((m[2], m[6], m[10]))
     return centres, directions
@@ -77,7 +87,7 @@ def svg_plot(rows, path, title):
     width, height, left, right, top, bottom = 760, 360, 70, 70, 30, 50
     frames = [r["frame"] for r in rows]
     x0, x1 = min(frames), max(frames)
-    rss_max = max(r["rss"] for r in rows) * 1.1
+    rss_max = max(max(r["rss"] for r in rows), 1.0) * 1.1
     kf = [r["keyframes"] or 0 for r in rows]
     kf_max = max(max(kf), 1) * 1.1
 
@@ -111,8 +121,22 @@ def svg_plot(rows, path, title):
     out.append(f'<text x="{width - 14}" y="{height / 2}" transform="rotate(90 {width - 14} {height / 2})" '
                f'text-anchor="middle" fill="#ff7f0e">keyframes in the map</text>')
     out.append("</svg>")
-    with open(path, "w") as f:
-        f.write("\n".join(out) + "\n")
+    write_atomically(path, "\n".join(out) + "\n")
+
+
+def write_atomically(path, text):
+    """Written beside `path` and renamed over it: a reader (a browser reloading the plot) never sees half a file,
+    and an interrupted write leaves the previous plot."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", dir=folder)
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
 
 
 def main():
@@ -123,11 +147,11 @@ def main():
     parser.add_argument("--truth", help="the drive's poses (KITTI format) for the share of new ground")
     parser.add_argument("--rows", type=int, default=1000, help="frames per table row (default 1000)")
     args = parser.parse_args()
+    if args.rows < 1:
+        parser.error("--rows must be at least 1")
     rows = read_rows(args.tracking_csv)
     if not rows:
         raise SystemExit(f"{args.tracking_csv}: no rss_mib column or no rows")
-    if args.rows < 1:
-        raise SystemExit("--rows must be at least 1")
     fresh = new_ground(*read_kitti_poses(args.truth)) if args.truth else None
     print("frames          peak RSS MiB   keyframes   map points   new keyframes   new ground   "
           f"(at the end of each {args.rows} frames)")
@@ -149,7 +173,8 @@ def main():
     print(f"growth over the second half: {slope_per_1000(half):.1f} MiB per 1000 frames; "
           f"over the whole run: {slope_per_1000(rows):.1f}")
     if args.run_json:
-        run = json.load(open(args.run_json))
+        with open(args.run_json) as f:
+            run = json.load(f)
         print(f"run.json: peak_rss_mib {run.get('peak_rss_mib')}, keyframes {run.get('keyframes')}, "
               f"points {run.get('points')}, loops {run.get('loops')}, tracked {run.get('tracked')}/{run.get('frames')}")
     if args.svg:
@@ -158,4 +183,12 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OSError as e:  # a file missing or unreadable: its name and why, not a traceback
+        raise SystemExit(f"soak_report: {e}")
+    except json.JSONDecodeError as e:
+        raise SystemExit(f"soak_report: --run-json is not JSON: {e}")
+    except KeyboardInterrupt:
+        print("soak_report: interrupted", file=sys.stderr)
+        sys.exit(130)

@@ -299,6 +299,81 @@ class Benchmark(unittest.TestCase):
             self.assertIn(why, r.stderr)
 
 
+class Soak(unittest.TestCase):
+    """scripts/soak.sh (a copy in a fake checkout, with soak_report.py) with a fake semslam; soak_report.py."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="soak-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.root = fake_checkout(self.tmp, "soak.sh", "soak_report.py")
+        write_executable(os.path.join(self.tmp, "bin", "semslam"), """
+            #!/bin/bash
+            echo "$*" >>"$0.calls"
+            command=$1
+            while [ $# -gt 0 ]; do
+              case "$1" in --out) out=$2 ;; --frames) frames=$2 ;; esac
+              shift
+            done
+            if [ "$command" = synth ]; then
+              mkdir -p "$out/sequences/00" "$out/poses"
+              seq "$frames" >"$out/sequences/00/times.txt"
+              for i in $(seq "$frames"); do echo "1 0 0 $i 0 1 0 0 0 0 1 0"; done >"$out/poses/00.txt"
+            else
+              mkdir -p "$out"
+              printf 'frame,rss_mib,keyframes,map_points\\n0,100,1,10\\n1,101.5,2,20\\n' >"$out/tracking.csv"
+              echo '{"frames": 2}' >"$out/run.json"
+            fi
+            """)
+        self.env = dict(os.environ, SEMSLAM_BIN="bin/semslam")
+        self.script = os.path.join(self.root, "scripts", "soak.sh")
+        self.report = os.path.join(SCRIPTS, "soak_report.py")
+
+    def test_folders_relative_to_the_callers_folder(self):
+        r = run([self.script, "3", "soak out", "plot.svg"], cwd=self.tmp, env=self.env)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertTrue(os.path.exists(os.path.join(self.tmp, "soak out", "run", "tracking.csv")))
+        self.assertIn("plot: %s/plot.svg" % self.tmp, r.stdout)
+        self.assertEqual(sorted(os.listdir(self.root)), ["scripts"])
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-build")))
+
+    def test_bad_arguments_run_nothing(self):
+        for args in (["abc"], ["0"], ["--frames", "10"], ["1", "2", "3", "4"]):
+            r = run([self.script] + args, cwd=self.tmp, env=self.env)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn("usage", r.stderr)
+        r = run([self.script, "3"], cwd=self.tmp, env=dict(self.env, SEMSLAM_BIN="no/semslam"))
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("not an executable semslam binary", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "bin", "semslam.calls")))
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "ran-build")))
+
+    def test_report_names_the_bad_input_without_a_traceback(self):
+        csv_path = os.path.join(self.tmp, "tracking.csv")
+        with open(csv_path, "w") as f:
+            f.write("frame,rss_mib\n0,100\nx,101\n")
+        for args, expected in (([os.path.join(self.tmp, "missing.csv")], "No such file"),
+                               ([csv_path], "tracking.csv:3: not a tracking.csv row"),
+                               ([csv_path, "--rows", "0"], "--rows must be at least 1")):
+            r = run([sys.executable, self.report] + args)
+            self.assertNotEqual(r.returncode, 0, args)
+            self.assertIn(expected, r.stderr)
+            self.assertNotIn("Traceback", r.stderr)
+
+    def test_report_plot_replaced_whole(self):
+        csv_path = os.path.join(self.tmp, "tracking.csv")
+        with open(csv_path, "w") as f:
+            f.write("frame,rss_mib,keyframes,map_points\n0,0,0,0\n1,0,0,0\n")  # no memory measured: no 1/0
+        svg = os.path.join(self.tmp, "out", "plot.svg")
+        os.makedirs(os.path.dirname(svg))
+        with open(svg, "w") as f:
+            f.write("the previous plot")
+        r = run([sys.executable, self.report, csv_path, "--svg", svg])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(os.listdir(os.path.dirname(svg)), ["plot.svg"])
+        with open(svg) as f:
+            self.assertTrue(f.read().startswith("<svg"))
+
+
 class SlurmLocal(unittest.TestCase):
     """scripts/slurm-local.sh with fake munged and Slurm daemons (perl processes whose command line is the
     daemon's), a fake sudo and `id -u` 1000: the real daemons and /run/munge are never touched."""
