@@ -18,8 +18,12 @@ levels=4
 features=2000
 seed=1
 eval_seed=7
+usage="usage: scripts/make-vocabulary.sh [--build DIR] [--source synth|procedural] [--frames N] [--k K] [--levels L]"
 while [[ $# -gt 0 ]]; do
   case $1 in
+    -h|--help) echo "$usage"; exit 0 ;;
+    --build|--source|--frames|--k|--levels)
+      [[ $# -ge 2 ]] || { echo "make-vocabulary.sh: $1 needs a value" >&2; echo "$usage" >&2; exit 2; } ;;&
     --build) build=$2; shift 2 ;;
     --source) source=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
@@ -33,6 +37,9 @@ bin=$build/bin/semslam
 out=$root/data/vocabulary/semslam.voc
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+# semslam stops on Ctrl-C and exits 130; say so here too (the vocabulary is written atomically: an interrupted
+# training leaves the previous one).
+trap 'echo "make-vocabulary.sh: interrupted" >&2; exit 130' INT
 
 case $source in
   synth)
@@ -50,9 +57,11 @@ case $source in
 esac
 "$bin" vocab info "$out"
 
-if "$bin" synth --help >/dev/null 2>&1 && "$bin" synth --out "$work/eval" --frames 1500 --seed "$eval_seed" >/dev/null 2>&1; then
-  echo "== place recognition on an unseen town (seed $eval_seed, 1500 frames, loops)"
-  "$bin" vocab eval --vocabulary "$out" --sequence "$work/eval/sequences/00"
-else
+if ! "$bin" synth --help >/dev/null 2>&1; then
   echo "== (no synthetic city renderer: retrieval not evaluated)"
+  exit 0
 fi
+# A render that fails (or is interrupted) is an error with its reason, not "no renderer".
+echo "== place recognition on an unseen town (seed $eval_seed, 1500 frames, loops)"
+"$bin" synth --out "$work/eval" --frames 1500 --seed "$eval_seed" -q
+"$bin" vocab eval --vocabulary "$out" --sequence "$work/eval/sequences/00"

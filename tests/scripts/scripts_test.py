@@ -374,6 +374,50 @@ class Soak(unittest.TestCase):
             self.assertTrue(f.read().startswith("<svg"))
 
 
+class MakeVocabulary(unittest.TestCase):
+    """scripts/make-vocabulary.sh (a copy in a fake checkout) with a fake semslam (--build)."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="vocabulary-test-")
+        self.addCleanup(lambda: subprocess.run(["rm", "-rf", self.tmp]))
+        self.root = fake_checkout(self.tmp, "make-vocabulary.sh")
+        # The second town's render (seed 7) takes FAKE_EVAL_SECONDS and exits FAKE_EVAL_EXIT; Ctrl-C: exit 130.
+        write_executable(os.path.join(self.tmp, "build", "bin", "semslam"), """
+            #!/bin/bash
+            echo "$*" >>"$0.calls"
+            case "$*" in
+              *"--seed 7"*)
+                touch "$0.evaluating"
+                trap 'kill $sleeper; echo "semslam: synth: interrupted by SIGINT" >&2; exit 130' INT
+                sleep "${FAKE_EVAL_SECONDS:-0}" & sleeper=$!
+                wait $sleeper
+                exit "${FAKE_EVAL_EXIT:-0}" ;;
+            esac
+            """)
+        self.command = [os.path.join(self.root, "scripts", "make-vocabulary.sh"), "--build", "build",
+                        "--source", "procedural"]
+
+    def test_a_failed_render_is_an_error_not_a_missing_renderer(self):
+        r = run(self.command, cwd=self.tmp, env=dict(os.environ, FAKE_EVAL_EXIT="1"))
+        self.assertEqual(r.returncode, 1)
+        self.assertNotIn("no synthetic city renderer", r.stdout)
+
+    def test_ctrl_c_while_evaluating(self):
+        code, out, err, seconds = interrupt_after(self.command, 0, cwd=self.tmp,
+                                                  env=dict(os.environ, FAKE_EVAL_SECONDS="30"),
+                                                  ready=os.path.join(self.tmp, "build", "bin", "semslam.evaluating"))
+        self.assertEqual(code, 130, out + err)
+        self.assertIn("make-vocabulary.sh: interrupted", err)
+        self.assertNotIn("no synthetic city renderer", out)
+        self.assertLess(seconds, 5)
+
+    def test_an_option_without_its_value(self):
+        r = run(self.command + ["--k"], cwd=self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--k needs a value", r.stderr)
+        self.assertNotIn("unbound", r.stderr)
+
+
 class SlurmLocal(unittest.TestCase):
     """scripts/slurm-local.sh with fake munged and Slurm daemons (perl processes whose command line is the
     daemon's), a fake sudo and `id -u` 1000: the real daemons and /run/munge are never touched."""
