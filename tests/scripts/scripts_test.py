@@ -418,6 +418,35 @@ class MakeVocabulary(unittest.TestCase):
         self.assertNotIn("unbound", r.stderr)
 
 
+@unittest.skipIf(subprocess.run(["/usr/bin/python3", "-c", "import numpy"], capture_output=True).returncode != 0,
+                 "Debian's python3 has no NumPy (python3-numpy)")
+class KittiDynamics(unittest.TestCase):
+    """scripts/kitti-dynamics.py (Debian's python3 with NumPy) on folders that are not the data."""
+
+    def kitti_dynamics(self, *args):
+        return run(["/usr/bin/python3", os.path.join(SCRIPTS, "kitti-dynamics.py")] + list(args))
+
+    def test_a_folder_without_the_data_is_an_error(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            for folder, expected in ((os.path.join(tmp, "missing"), "is not a folder"),
+                                     (tmp, "holds no kitti_odom_gt_poses")):
+                r = self.kitti_dynamics(folder)
+                self.assertEqual(r.returncode, 1, folder)
+                self.assertIn(expected, r.stderr)
+                self.assertEqual(r.stdout, "")
+
+    def test_bad_poses_and_options(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            os.makedirs(os.path.join(tmp, "kitti_odom_gt_poses"))
+            with open(os.path.join(tmp, "kitti_odom_gt_poses", "00.txt"), "w") as f:
+                f.write("1 0 0 0\n0 1 0 0\n")
+            r = self.kitti_dynamics(tmp)
+            self.assertEqual(r.returncode, 1)
+            self.assertIn("00.txt: not KITTI poses", r.stderr)
+            self.assertNotIn("Traceback", r.stderr)
+        self.assertEqual(self.kitti_dynamics("--bogus").returncode, 2)
+
+
 class SlurmLocal(unittest.TestCase):
     """scripts/slurm-local.sh with fake munged and Slurm daemons (perl processes whose command line is the
     daemon's), a fake sudo and `id -u` 1000: the real daemons and /run/munge are never touched."""
