@@ -263,12 +263,17 @@ class CityOnDaskTest(unittest.TestCase):
         assert_complete_city(self, self.sequences, out, output)
         self.assertRegex(output, rf"drive {drive}: done: {FRAMES} frames")
 
-    def test_only_the_merges_it_made_are_removed(self):
+    def out_with_drives_made(self, name):
+        """A new OUT holding the first city's drive runs (made already: not run again)."""
         self.require_merge()
         first, code, output = self.first_city()
         self.assertEqual(code, 0, output)
-        out = os.path.join(self.tmp, "city_own_merges")
-        shutil.copytree(os.path.join(first, "drives"), os.path.join(out, "drives"))  # made already: not run again
+        out = os.path.join(self.tmp, name)
+        shutil.copytree(os.path.join(first, "drives"), os.path.join(out, "drives"))
+        return out
+
+    def test_only_the_merges_it_made_are_removed(self):
+        out = self.out_with_drives_made("city_own_merges")
         mine = os.path.join(out, "merges", "mine", "notes.txt")
         os.makedirs(os.path.dirname(mine))
         with open(mine, "w") as f:
@@ -299,11 +304,7 @@ class CityOnDaskTest(unittest.TestCase):
         self.assertFalse(os.path.exists(out))  # made by the command and left empty: removed
 
     def test_a_failing_merge_fails_the_city_with_its_stderr(self):
-        self.require_merge()
-        first, code, output = self.first_city()
-        self.assertEqual(code, 0, output)
-        out = os.path.join(self.tmp, "city_bad_merge")
-        shutil.copytree(os.path.join(first, "drives"), os.path.join(out, "drives"))  # made already: not run again
+        out = self.out_with_drives_made("city_bad_merge")
         broken = os.path.join(self.tmp, "broken_merge.sh")
         with open(broken, "w") as f:
             f.write(f"#!/bin/sh\nif [ \"$1\" = merge ]; then echo 'merge: error: a broken map' >&2; exit 3; fi\n"
