@@ -31,7 +31,7 @@ else
   cd "$(dirname "$0")/.."
   bin="$PWD/build/release/bin/semslam"
   if [ ! -x "$bin" ]; then
-    ./scripts/build.sh >/dev/null || exit 1
+    SEMSLAM_BUILD_PRESET=release ./scripts/build.sh >/dev/null || exit 1
   fi
 fi
 passed=0 failed=0

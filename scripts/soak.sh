@@ -25,7 +25,7 @@ bin="${SEMSLAM_BIN:+$(realpath -m -- "$SEMSLAM_BIN")}"
 cd "$(dirname "$0")/.."
 if [ -z "$bin" ]; then
   bin="$PWD/build/release/bin/semslam"
-  [ -x "$bin" ] || ./scripts/build.sh
+  [ -x "$bin" ] || SEMSLAM_BUILD_PRESET=release ./scripts/build.sh
 elif [ ! -x "$bin" ] || [ -d "$bin" ]; then
   echo "soak: SEMSLAM_BIN=$SEMSLAM_BIN is not an executable semslam binary" >&2
   exit 2

@@ -31,8 +31,18 @@ def run(command, cwd=None, env=None, timeout=60):
     return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
 
 
-def processes_with(marker):
-    """Pids of the processes whose command line holds `marker` (a temporary folder's name)."""
+def processes_with(marker, settle=0.0):
+    """Pids of the processes whose command line holds `marker` (a temporary folder's name); with `settle`, those
+    still there after up to that many seconds (a process killed a moment ago may not be gone yet)."""
+    deadline = time.monotonic() + settle
+    found = _processes_with(marker)
+    while found and time.monotonic() < deadline:
+        time.sleep(0.05)
+        found = _processes_with(marker)
+    return found
+
+
+def _processes_with(marker):
     found = []
     for pid in os.listdir("/proc"):
         if not pid.isdigit() or int(pid) == os.getpid():
@@ -149,7 +159,7 @@ class Fuzz(unittest.TestCase):
         self.assertIn("fuzz: interrupted", err)
         self.assertNotIn("FAILED", err)
         self.assertLess(seconds, 5)
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
         self.assertEqual([f for f in os.listdir(self.tmp) if f.startswith("started-")],
                          ["started-fuzz_camera_yaml"])
 
@@ -163,7 +173,7 @@ class Fuzz(unittest.TestCase):
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=10)
         self.assertEqual(p.returncode, 143, err)
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
 
 
 class CheckRobustness(unittest.TestCase):
@@ -206,7 +216,7 @@ class CheckRobustness(unittest.TestCase):
         self.assertEqual(code, 130, out + err)
         self.assertIn("check-robustness: interrupted", err)
         self.assertLess(seconds, 5)
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
         self.assertEqual(os.listdir(self.env["TMPDIR"]), [])
 
 
@@ -251,6 +261,18 @@ class Demo(unittest.TestCase):
 
     def test_options_alone_go_to_semslam_demo(self):
         self.assertEqual(self.demo("--frames", "100"), "demo --out out/demo --frames 100")
+
+
+class Build(unittest.TestCase):
+    def test_an_argument_is_refused_not_ignored(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            root = fake_checkout(tmp)
+            with open(os.path.join(SCRIPTS, "build.sh")) as f:  # the real one over the fake
+                write_executable(os.path.join(root, "scripts", "build.sh"), f.read())
+            r = run([os.path.join(root, "scripts", "build.sh"), "debug"], env=dict(os.environ, PATH=fake_cmake(tmp)))
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("SEMSLAM_BUILD_PRESET", r.stderr)
+            self.assertEqual(sorted(os.listdir(tmp)), ["checkout", "path"])  # no install-deps, no cmake
 
 
 class Benchmark(unittest.TestCase):
@@ -511,7 +533,7 @@ class SlurmLocal(unittest.TestCase):
         self.assertEqual(len(processes_with(self.tmp)), 3)
         r = run([self.script, "stop", "slurm+1.d"], cwd=self.tmp, env=self.env)
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
         self.assertIn("munged --stop", self.calls())
         self.assertFalse(os.path.exists(os.path.join(self.tmp, "slurm+1.d", "munged.started")))
 
@@ -521,7 +543,7 @@ class SlurmLocal(unittest.TestCase):
         self.assertEqual(run([self.script, "start", dir], env=env).returncode, 0)
         self.assertEqual(run([self.script, "stop", dir], env=env).returncode, 0)
         self.assertNotIn("munged", self.calls())
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
 
     def test_a_daemon_that_ends_is_reported_at_once_and_nothing_is_left(self):
         start = time.monotonic()
@@ -529,7 +551,7 @@ class SlurmLocal(unittest.TestCase):
         self.assertEqual(r.returncode, 1)
         self.assertIn("a daemon ended while starting", r.stderr)
         self.assertLess(time.monotonic() - start, 20)
-        self.assertEqual(processes_with(self.tmp), [])
+        self.assertEqual(processes_with(self.tmp, settle=2), [])
 
     def test_bad_arguments(self):
         for args in (["start", os.path.join(self.tmp, "a b")], ["stop", "x", "y"], ["restart"], []):
