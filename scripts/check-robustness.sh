@@ -26,9 +26,9 @@ if [ $# -eq 1 ]; then
     echo "check-robustness: $1 is not an executable semslam binary" >&2
     exit 2
   fi
-  cd "$(dirname "$0")/.."
-else
-  cd "$(dirname "$0")/.."
+fi
+cd "$(dirname "$0")/.." || exit 1
+if [ $# -eq 0 ]; then
   bin="$PWD/build/release/bin/semslam"
   if [ ! -x "$bin" ]; then
     SEMSLAM_BUILD_PRESET=release ./scripts/build.sh >/dev/null || exit 1
