@@ -469,6 +469,24 @@ class KittiDynamics(unittest.TestCase):
         self.assertEqual(self.kitti_dynamics("--bogus").returncode, 2)
 
 
+class InstallDeps(unittest.TestCase):
+    def test_without_root_or_sudo_it_says_so(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # Only bash and grep from the system: no sudo, whatever this machine has; not root; nothing installed.
+            fake = os.path.join(tmp, "bin")
+            os.makedirs(fake)
+            for tool in ("bash", "grep"):
+                os.symlink(subprocess.run(["bash", "-c", "command -v " + tool], capture_output=True,
+                                          text=True).stdout.strip(), os.path.join(fake, tool))
+            write_executable(os.path.join(fake, "id"), "#!/bin/sh\necho 1000\n")
+            write_executable(os.path.join(fake, "dpkg-query"), "#!/bin/sh\nexit 1\n")
+            write_executable(os.path.join(fake, "apt-get"), "#!/bin/sh\ntouch \"$(dirname \"$0\")/ran-apt\"\n")
+            result = run([os.path.join(SCRIPTS, "install-deps.sh")], env={"PATH": fake})
+            self.assertEqual(result.returncode, 1, result.stderr)
+            self.assertIn("needs root, and there is no sudo here", result.stderr)
+            self.assertFalse(os.path.exists(os.path.join(fake, "ran-apt")))
+
+
 class SlurmLocal(unittest.TestCase):
     """scripts/slurm-local.sh with fake munged and Slurm daemons (perl processes whose command line is the
     daemon's), a fake sudo and `id -u` 1000: the real daemons and /run/munge are never touched."""
