@@ -73,14 +73,11 @@ Trajectory TrajectoryFromArrays(const py::array_t<double>& timestamps, const py:
     if (!m.allFinite()) throw py::value_error(which + " holds a value that is not finite");
     if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9))
       throw py::value_error(which + ": the bottom row of a rigid transform is 0 0 0 1");
-    // A rotation, within what trajectory files are allowed (trajectory_io.cc); the pose is
-    // re-orthonormalized.
+    // A rotation within what trajectory files are allowed; the pose is re-orthonormalized.
     const Eigen::Matrix3d rotation = m.topLeftCorner<3, 3>();
-    const double deviation =
-        (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-    if (deviation > 1e-2 || rotation.determinant() <= 0.0) {
+    if (!IsRotation(rotation)) {
       throw py::value_error(which + ": its upper-left 3 x 3 is not a rotation (largest |R^T R - I| entry " +
-                            std::to_string(deviation) + ")");
+                            std::to_string(OrthonormalityDeviation(rotation)) + ")");
     }
     trajectory.push_back({t(i), Rigid3d::FromMatrix(Eigen::Matrix3x4d(m.topRows<3>()))});
   }

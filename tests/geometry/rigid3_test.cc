@@ -85,5 +85,18 @@ TEST(Sim3d, TransformPoseScalesPositionOnly) {
   EXPECT_TRUE((s.rotation * ahead_src).isApprox(ahead_tgt));
 }
 
+TEST(IsRotation, RoundingPassesScaleAndReflectionDoNot) {
+  const Eigen::Matrix3d r = QuaternionExp(Eigen::Vector3d(0.3, -0.2, 1.1)).toRotationMatrix();
+  EXPECT_NEAR(OrthonormalityDeviation(r), 0.0, 1e-12);
+  EXPECT_TRUE(IsRotation(r));
+  // Six significant digits, as text files give them.
+  const Eigen::Matrix3d rounded = (r * 1e6).array().round() / 1e6;
+  EXPECT_TRUE(IsRotation(rounded));
+  EXPECT_FALSE(IsRotation(2.0 * r));  // deviation 3
+  EXPECT_NEAR(OrthonormalityDeviation(2.0 * r), 3.0, 1e-9);
+  EXPECT_FALSE(IsRotation(-r));  // orthonormal, determinant -1
+  EXPECT_FALSE(IsRotation(Eigen::Matrix3d::Zero()));
+}
+
 }  // namespace
 }  // namespace semslam

@@ -82,6 +82,14 @@ Eigen::Vector6d Rigid3d::Log() const {
 
 double Rigid3d::RotationAngle() const { return QuaternionLog(rotation).norm(); }
 
+double OrthonormalityDeviation(const Eigen::Matrix3d& r) {
+  return (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+}
+
+bool IsRotation(const Eigen::Matrix3d& r, double tolerance) {
+  return OrthonormalityDeviation(r) <= tolerance && r.determinant() > 0.0;
+}
+
 Eigen::Matrix3d SkewSymmetric(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;

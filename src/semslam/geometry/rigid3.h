@@ -31,6 +31,13 @@ struct Rigid3d {
   double RotationAngle() const;
 };
 
+// Largest |R^T R - I| entry: how far `r` is from orthonormal.
+double OrthonormalityDeviation(const Eigen::Matrix3d& r);
+// Whether a matrix read from a file or given by a caller is a rotation: orthonormal within `tolerance` (text
+// files carry rounding, which FromMatrix removes) and not a reflection.
+inline constexpr double kRotationTolerance = 1e-2;
+bool IsRotation(const Eigen::Matrix3d& r, double tolerance = kRotationTolerance);
+
 // SO(3) helpers on rotation vectors.
 Eigen::Matrix3d SkewSymmetric(const Eigen::Vector3d& v);
 Eigen::Quaterniond QuaternionExp(const Eigen::Vector3d& rotation_vector);

@@ -242,12 +242,11 @@ Rigid3d ReadKittiRawRigid(const fs::path& path) {
   for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = r[i];
   for (int i = 0; i < 3; ++i) m(i, 3) = t[i];
   const Eigen::Matrix3d rotation = m.leftCols<3>();
-  const double deviation =
-      (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (deviation > 1e-2 || rotation.determinant() < 0) {
+  if (!IsRotation(rotation)) {
     const auto line = calib.lines.find("R");
     throw InputError(SourceLocation{path, line->second}, "R",
-                     fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})", deviation));
+                     fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})",
+                                 OrthonormalityDeviation(rotation)));
   }
   return Rigid3d::FromMatrix(m);
 }

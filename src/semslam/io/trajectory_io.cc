@@ -12,6 +12,7 @@
 #include "semslam/core/atomic_file.h"
 #include "semslam/core/error.h"
 #include "semslam/core/text_reader.h"
+#include "semslam/geometry/rigid3.h"
 
 namespace semslam {
 
@@ -22,8 +23,6 @@ namespace {
 // A quaternion whose norm is further than this from 1 is an error (columns swapped, a wrong format);
 // smaller deviations (rounding in text files) are normalized away.
 constexpr double kQuaternionNormTolerance = 1e-2;
-// Largest |R^T R - I| entry accepted in a KITTI pose before it counts as "not a rotation".
-constexpr double kOrthonormalityTolerance = 1e-2;
 
 constexpr const char* kTumFields[8] = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
 constexpr const char* kKittiFields[12] = {"r00", "r01", "r02", "tx",  "r10", "r11",
@@ -51,8 +50,8 @@ Rigid3d ParseKittiPose(const std::vector<std::string_view>& tokens, const Source
   Eigen::Matrix3x4d m;
   for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = ParseDouble(tokens[i], where, kKittiFields[i]);
   const Eigen::Matrix3d r = m.leftCols<3>();
-  const double deviation = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (deviation > kOrthonormalityTolerance) {
+  const double deviation = OrthonormalityDeviation(r);
+  if (deviation > kRotationTolerance) {
     throw InputError(
         where, "r00..r22",
         fmt::format("rotation is not orthonormal (largest |R^T R - I| entry {:.3g})", deviation));
