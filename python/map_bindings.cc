@@ -96,9 +96,8 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
     try {
       ReadGeoSection(ParseJson(it->second), out);
-    } catch (const py::error_already_set& e) {  // not JSON, or a key missing
-      throw InputError(path, "section 'geo': " + std::string(e.what()));
-    } catch (const py::cast_error& e) {  // a value of another type
+    } catch (const std::exception&
+                 e) {  // not JSON or a key missing (error_already_set), a value's type (cast_error)
       throw InputError(path, "section 'geo': " + std::string(e.what()));
     }
   }

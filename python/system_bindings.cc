@@ -27,9 +27,6 @@ py::dict SequenceCameraDict(const PinholeCamera& camera, const std::optional<Ste
   return d;
 }
 
-constexpr const char* kCameraKeys =
-    "camera: a dict with width, height (integers), fx, fy, cx, cy (numbers) and baseline for stereo";
-
 PinholeCamera CameraFromDict(const py::dict& d) {
   PinholeCamera camera;
   try {
@@ -39,10 +36,10 @@ PinholeCamera CameraFromDict(const py::dict& d) {
     camera.fy = d["fy"].cast<double>();
     camera.cx = d["cx"].cast<double>();
     camera.cy = d["cy"].cast<double>();
-  } catch (const py::error_already_set&) {  // a key missing
-    throw py::value_error(kCameraKeys);
-  } catch (const py::cast_error&) {  // a value of another type
-    throw py::value_error(kCameraKeys);
+  } catch (
+      const std::exception&) {  // a key missing (error_already_set) or a value of another type (cast_error)
+    throw py::value_error(
+        "camera: a dict with width, height (integers), fx, fy, cx, cy (numbers) and baseline for stereo");
   }
   camera.Check();
   return camera;

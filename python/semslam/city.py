@@ -143,9 +143,7 @@ def check_out(out: str, drives: List[Drive]) -> None:
 
 
 def prepare_out(out: str) -> str:
-    out = os.path.abspath(out)
-    if os.path.exists(out) and not os.path.isdir(out):
-        raise CityInputError(f"{out}: --out exists and is not a folder")
+    out = os.path.abspath(out)  # check_out has refused an OUT that is a file
     try:
         os.makedirs(os.path.join(out, "drives"), exist_ok=True)
         probe = os.path.join(out, f".write-test-{uuid.uuid4().hex[:8]}")
@@ -549,12 +547,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         try:
             semslam = find_semslam(args.semslam)
             drives = collect_drives(args)
-            check_out(os.path.abspath(args.out), drives)
+            out = os.path.abspath(args.out)
+            check_out(out, drives)
             address = check_scheduler(args.scheduler) if args.scheduler else None
         except CityInputError as e:
             print(f"semslam.city: error: {e}", file=sys.stderr)
             return 2
-        out = os.path.abspath(args.out)
         created = not os.path.lexists(out)
         lock = None
         try:
