@@ -221,15 +221,16 @@ class CheckRobustness(unittest.TestCase):
 
 
 def fake_cmake(tmp):
-    """A PATH whose cmake "builds" build/release/bin/semslam: a fake that notes its arguments in
-    tmp/semslam-calls and exits $FAKE_SEMSLAM_EXIT (0)."""
+    """A PATH whose cmake "builds" build/PRESET/bin/semslam for the `--preset PRESET` it is given: a fake that
+    notes its arguments in tmp/semslam-calls and exits $FAKE_SEMSLAM_EXIT (0)."""
     write_executable(os.path.join(tmp, "path", "cmake"), """
         #!/bin/bash
         echo "cmake $*" >>"%s/ran-cmake"
-        mkdir -p build/release/bin
+        while [ $# -gt 0 ]; do [ "$1" = --preset ] && preset=$2; shift; done
+        mkdir -p "build/$preset/bin"
         printf '#!/bin/bash\\necho "$*" >>%s/semslam-calls\\nexit ${FAKE_SEMSLAM_EXIT:-0}\\n' \\
-          >build/release/bin/semslam
-        chmod +x build/release/bin/semslam
+          >"build/$preset/bin/semslam"
+        chmod +x "build/$preset/bin/semslam"
         """ % (tmp, tmp))
     return os.path.join(tmp, "path") + ":" + os.environ["PATH"]
 
