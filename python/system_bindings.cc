@@ -266,7 +266,8 @@ void AddSystemBindings(py::module_& m) {
            py::arg("config") = py::none(), py::arg("vocabulary") = py::none(), py::arg("segmenter") = "none",
            py::arg("labels") = py::none())
       .def("process", &PySystem::Process, py::arg("image"), py::arg("timestamp"),
-           py::arg("right") = py::none())
+           py::arg("right") = py::none(),
+           "Tracks one frame; timestamp in seconds, increasing (keyframes are spaced in time)")
       .def("finish", &PySystem::Finish,
            "Lets mapping and loop closing finish and runs the final optimization")
       .def("trajectory", &PySystem::Trajectory, "(timestamps, poses) of every tracked frame")

@@ -67,6 +67,24 @@ TEST(SlamOptions, ConfigRangeErrorsNameTheLineAndKey) {
   }
 }
 
+// A key an earlier version read is refused with what replaced it, at its line; the new key is read.
+TEST(SlamOptions, ConfigRenamedKeyNamesItsReplacement) {
+  testing::TempDir dir;
+  std::ofstream(dir / "old.yaml") << "tracking:\n  pacing: fast\n  min_frames_between_keyframes: 3\n";
+  SlamOptions options;
+  try {
+    ApplySlamConfig(dir / "old.yaml", &options);
+    FAIL() << "a renamed key was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("old.yaml:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("now tracking.min_seconds_between_keyframes"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream(dir / "new.yaml") << "tracking:\n  min_seconds_between_keyframes: 0.5\n";
+  ApplySlamConfig(dir / "new.yaml", &options);
+  EXPECT_EQ(options.tracker.min_seconds_between_keyframes, 0.5);
+}
+
 // Options that mean nothing without another are refused, not silently ignored.
 TEST(RunOptions, FlagsThatNeedAnotherAreRefused) {
   RunOptions options;
@@ -86,7 +104,7 @@ TEST(RunOptions, FlagsThatNeedAnotherAreRefused) {
   EXPECT_THROW(options.Check(), InvalidArgument);
   options.segmenter = "truth-noisy:0.1";
   EXPECT_NO_THROW(options.Check());
-  options.slam.tracker.min_frames_between_keyframes = 11;
+  options.slam.tracker.min_seconds_between_keyframes = 1.5;  // above max_seconds_between_keyframes
   EXPECT_THROW(options.Check(), InvalidArgument);
 }
 

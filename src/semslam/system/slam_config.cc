@@ -41,6 +41,17 @@ Field BindPath(std::filesystem::path* path) {
           [path](YAML::Emitter& out) { out << path->string(); }};
 }
 
+// Keys an earlier version read, with what replaced them: an old configuration file is told what to write.
+const std::map<std::string, std::string>& RenamedKeys() {
+  static const std::map<std::string, std::string> renamed = {
+      {"tracking.max_frames_between_keyframes",
+       "tracking.max_seconds_between_keyframes (in seconds: 10 frames at 10 Hz are 1.0)"},
+      {"tracking.min_frames_between_keyframes",
+       "tracking.min_seconds_between_keyframes (in seconds: 3 frames at 10 Hz are 0.3)"},
+  };
+  return renamed;
+}
+
 std::map<std::string, Section> Sections(SlamOptions* o) {
   std::map<std::string, Section> s;
   s["features"] = {
@@ -54,8 +65,8 @@ std::map<std::string, Section> Sections(SlamOptions* o) {
       {"level_share_exponent", Bind(&o->tracker.orb.level_share_exponent)},
   };
   s["tracking"] = {
-      {"max_frames_between_keyframes", Bind(&o->tracker.max_frames_between_keyframes)},
-      {"min_frames_between_keyframes", Bind(&o->tracker.min_frames_between_keyframes)},
+      {"max_seconds_between_keyframes", Bind(&o->tracker.max_seconds_between_keyframes)},
+      {"min_seconds_between_keyframes", Bind(&o->tracker.min_seconds_between_keyframes)},
       {"keyframe_tracked_ratio_mono", Bind(&o->tracker.keyframe_tracked_ratio_mono)},
       {"keyframe_tracked_ratio_stereo", Bind(&o->tracker.keyframe_tracked_ratio_stereo)},
       {"keyframe_collapse_ratio_mono", Bind(&o->tracker.keyframe_collapse_ratio_mono)},
@@ -179,7 +190,13 @@ void ApplySlamConfig(const std::filesystem::path& file, SlamOptions* options) {
       const std::string key = item.first.as<std::string>();
       const std::string field = section_name + "." + key;
       const auto it = section->second.find(key);
-      if (it == section->second.end()) throw InputError(Where(file, item.first.Mark()), field, "unknown key");
+      if (it == section->second.end()) {
+        const auto renamed = RenamedKeys().find(field);
+        throw InputError(Where(file, item.first.Mark()), field,
+                         renamed == RenamedKeys().end()
+                             ? std::string("unknown key")
+                             : fmt::format("unknown key: now {}", renamed->second));
+      }
       lines[field] = item.first.Mark().line + 1;
       try {
         it->second.read(item.second);

@@ -28,10 +28,10 @@ void TrackerOptions::Check() const {
   Require(init_num_features >= 0, "tracker: init_num_features must be >= 0");
   Require(init_level_share_exponent >= 0 && init_level_share_exponent <= 4,
           "tracker: init_level_share_exponent must be in [0, 4]");
-  Require(max_frames_between_keyframes >= 1, "tracker: max_frames_between_keyframes must be >= 1");
-  Require(min_frames_between_keyframes >= 0, "tracker: min_frames_between_keyframes must be >= 0");
-  Require(min_frames_between_keyframes <= max_frames_between_keyframes,
-          "tracker: min_frames_between_keyframes must not exceed max_frames_between_keyframes");
+  Require(max_seconds_between_keyframes > 0, "tracker: max_seconds_between_keyframes must be positive");
+  Require(min_seconds_between_keyframes >= 0, "tracker: min_seconds_between_keyframes must be >= 0");
+  Require(min_seconds_between_keyframes <= max_seconds_between_keyframes,
+          "tracker: min_seconds_between_keyframes must not exceed max_seconds_between_keyframes");
   Require(close_depth_baselines > 0, "tracker: close_depth_baselines must be positive");
   Require(keyframe_tracked_ratio_mono > 0 && keyframe_tracked_ratio_mono <= 1 &&
               keyframe_tracked_ratio_stereo > 0 && keyframe_tracked_ratio_stereo <= 1,
@@ -566,8 +566,7 @@ bool Tracker::TrackLocalMap(Frame& frame) {
   }
   constexpr int kTracked = 30, kRelocalized = 50, kRecovered = 20;
   const bool after_relocalization =
-      frame.id() <
-      last_relocalization_frame_ + static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
+      !SecondsReached(frame.timestamp() - last_relocalization_time_, options_.max_seconds_between_keyframes);
   if (!after_relocalization) return inliers_ >= kTracked;
   return inliers_ >= (last_relocalization_recovered_ ? kRecovered : kRelocalized);
 }

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <opencv2/core/mat.hpp>
 #include <optional>
@@ -30,10 +31,12 @@ struct TrackerOptions {
   // parallax the two-view test needs (by side length, the 200-frame city initialized at frame 14, not 0).
   double init_level_share_exponent = 2.0;
   // A new keyframe is due when the frame tracks fewer than keyframe_tracked_ratio of the reference keyframe's
-  // points and min_frames have passed since the last one (max_frames: whatever the ratio), or at once when it
-  // tracks fewer than keyframe_collapse_ratio of them.
-  int max_frames_between_keyframes = 10;  // usually the frame rate
-  int min_frames_between_keyframes = 3;
+  // points and min_seconds have passed since the last one (max_seconds: whatever the ratio), or at once when
+  // it tracks fewer than keyframe_collapse_ratio of them. In seconds of the frames' timestamps, not in
+  // frames, so that at a lower frame rate, where the view changes more from frame to frame, keyframes still
+  // come about as often per second. At 10 Hz these are 10 and 3 frames.
+  double max_seconds_between_keyframes = 1.0;
+  double min_seconds_between_keyframes = 0.3;
   double keyframe_tracked_ratio_mono = 0.9;
   double keyframe_tracked_ratio_stereo = 0.75;
   double keyframe_collapse_ratio_mono = 0.5;
@@ -212,6 +215,8 @@ class Tracker {
   void SearchLocalMapPoints(Frame& frame);
   int OptimizeFramePose(Frame& frame);
   bool NeedNewKeyFrame(const Frame& frame) const;
+  // Whether `elapsed` seconds between two frames' timestamps reach `seconds` (tracker_keyframes.cc).
+  static bool SecondsReached(double elapsed, double seconds);
   void CreateNewKeyFrame(Frame& frame);
   // Queues the keyframes this frame made in the mapper (at the end of Track()).
   void HandKeyFramesToMapper();
@@ -243,6 +248,8 @@ class Tracker {
   // Track().
   std::optional<Rigid3d> tracked_camera_from_reference_;
   std::uint64_t last_relocalization_frame_ = 0;
+  // When the last relocalization was (frame timestamp); -inf before the first.
+  double last_relocalization_time_ = -std::numeric_limits<double>::infinity();
   // The last relocalization was a recovery: within reach of the motion model's prediction after a short
   // loss. The local map then confirms it with fewer inliers, and keyframes need not wait: right after a gap a
   // monocular map holds few points the camera still sees, and only a keyframe adds more.

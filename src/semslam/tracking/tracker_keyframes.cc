@@ -1,19 +1,30 @@
 // Tracker: keyframe decisions and insertion.
 
 #include <algorithm>
+#include <limits>
 
 #include "semslam/mapping/local_mapper.h"
 #include "semslam/tracking/tracker.h"
 
 namespace semslam {
 
+bool Tracker::SecondsReached(double elapsed, double seconds) {
+  // Timestamps are given to a tenth of a millisecond or finer: a gap of whole frame periods (0.3 s at 10 Hz)
+  // counts as reached although its floating-point difference may fall just short.
+  constexpr double kTimestampTolerance = 1e-4;
+  return elapsed >= seconds - kTimestampTolerance;
+}
+
 bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   if (options_.localization_only || mapper_ == nullptr) return false;
   if (mapper_->IsStopped() || mapper_->StopRequested()) return false;
   const size_t num_keyframes = map_.NumKeyFramesOfMap(map_.active_map_id());
-  const auto max_frames = static_cast<std::uint64_t>(options_.max_frames_between_keyframes);
-  if (frame.id() < last_relocalization_frame_ + max_frames && num_keyframes > max_frames &&
-      !last_relocalization_recovered_) {
+  // Right after a relocalization (not a recovery) its pose is not trusted with a keyframe yet, unless the map
+  // is so small that it needs keyframes more than it risks a wrong one.
+  constexpr size_t kSmallMapKeyFrames = 10;
+  if (!SecondsReached(frame.timestamp() - last_relocalization_time_,
+                      options_.max_seconds_between_keyframes) &&
+      num_keyframes > kSmallMapKeyFrames && !last_relocalization_recovered_) {
     return false;
   }
   const int min_observations = num_keyframes <= 2 ? 2 : 3;
@@ -42,10 +53,12 @@ bool Tracker::NeedNewKeyFrame(const Frame& frame) const {
   // collapses (a turn). Never on whether the mapper is idle, so that the keyframes of a drive do not depend
   // on how fast its frames are fed or how busy the machine is (a full queue holds tracking back instead: see
   // SlamSystem::ProcessFrame).
-  const std::uint64_t last_kf_frame = last_keyframe_ ? last_keyframe_->frame_id() : 0;
-  const std::uint64_t since_last = frame.id() >= last_kf_frame ? frame.id() - last_kf_frame : max_frames;
-  const bool c1a = since_last >= max_frames;
-  const bool c1b = since_last >= static_cast<std::uint64_t>(options_.min_frames_between_keyframes);
+  // A last keyframe from later (another session's, after relocalizing in a loaded map) counts as long ago.
+  const double since_last = last_keyframe_ != nullptr && frame.timestamp() >= last_keyframe_->timestamp()
+                                ? frame.timestamp() - last_keyframe_->timestamp()
+                                : std::numeric_limits<double>::infinity();
+  const bool c1a = SecondsReached(since_last, options_.max_seconds_between_keyframes);
+  const bool c1b = SecondsReached(since_last, options_.min_seconds_between_keyframes);
   const bool weak = options_.monocular && inliers_ < options_.keyframe_weak_inliers_mono;
   const bool c1c =
       inliers_ < reference_matches * (options_.monocular ? options_.keyframe_collapse_ratio_mono

@@ -145,6 +145,7 @@ bool Tracker::Relocalize(Frame& frame) {
       frame, database_, map_, [this](Frame& f) { return OptimizeFramePose(f); }, relocalization);
   if (!ok) return false;
   last_relocalization_frame_ = frame.id();
+  last_relocalization_time_ = frame.timestamp();
   last_relocalization_recovered_ = relocalization.predicted.has_value();
   velocity_.reset();
   if (last_relocalization_recovered_) {
@@ -189,6 +190,7 @@ bool Tracker::RelocalizeAfterCollapse(Frame& frame, int last_inliers) {
   std::vector<KeyFrame*> local_keyframes = local_keyframes_;
   std::vector<MapPoint*> local_points = local_points_;
   const std::uint64_t relocalization_frame = last_relocalization_frame_;
+  const double relocalization_time = last_relocalization_time_;
   const bool relocalization_recovered = last_relocalization_recovered_;
   const std::optional<Rigid3d> velocity = velocity_;
   const bool relocalized = Relocalize(candidate) && TrackLocalMap(candidate);
@@ -206,6 +208,7 @@ bool Tracker::RelocalizeAfterCollapse(Frame& frame, int last_inliers) {
   local_keyframes_ = std::move(local_keyframes);
   local_points_ = std::move(local_points);
   last_relocalization_frame_ = relocalization_frame;
+  last_relocalization_time_ = relocalization_time;
   last_relocalization_recovered_ = relocalization_recovered;
   velocity_ = velocity;
   inliers_ = tracked_inliers;
