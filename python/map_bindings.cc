@@ -96,8 +96,8 @@ LoadedMap LoadMap(const std::filesystem::path& path) {
   if (const auto it = contents.extra_sections.find("geo"); it != contents.extra_sections.end()) {
     try {
       ReadGeoSection(ParseJson(it->second), out);
-    } catch (const std::exception&
-                 e) {  // not JSON or a key missing (error_already_set), a value's type (cast_error)
+    } catch (const std::exception& e) {
+      // Not JSON or a key missing (error_already_set), a value's type (cast_error).
       throw InputError(path, "section 'geo': " + std::string(e.what()));
     }
   }

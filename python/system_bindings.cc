@@ -3,14 +3,12 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
-#include <cmath>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
 
 #include "bindings.h"
-#include "semslam/core/error.h"
 #include "semslam/io/sequence.h"
 #include "semslam/io/trajectory_io.h"
 #include "semslam/semantics/segmenter.h"
@@ -36,8 +34,8 @@ PinholeCamera CameraFromDict(const py::dict& d) {
     camera.fy = d["fy"].cast<double>();
     camera.cx = d["cx"].cast<double>();
     camera.cy = d["cy"].cast<double>();
-  } catch (
-      const std::exception&) {  // a key missing (error_already_set) or a value of another type (cast_error)
+  } catch (const std::exception&) {
+    // A key missing (error_already_set) or a value of another type (cast_error).
     throw py::value_error(
         "camera: a dict with width, height (integers), fx, fy, cx, cy (numbers) and baseline for stereo");
   }
@@ -148,18 +146,13 @@ class PySystem {
     } else if (!right.is_none()) {
       throw py::value_error("right: a monocular system takes no right image (mode='stereo' does)");
     }
-    if (!std::isfinite(timestamp)) throw py::value_error("timestamp must be finite");
     TrackingResult result;
     {
       py::gil_scoped_release release;  // tracking takes a while; the mapping threads never need Python
+      // Under the lock, two threads feeding one system still give increasing times (SlamSystem checks them).
       const std::lock_guard<std::mutex> lock(mutex_);
-      // Checked under the lock: two threads feeding one system must still give increasing times.
-      if (last_timestamp_ && !(timestamp > *last_timestamp_)) {
-        throw InvalidArgument("timestamp " + std::to_string(timestamp) +
-                              " does not follow the last frame's (" + std::to_string(*last_timestamp_) + ")");
-      }
-      last_timestamp_ = timestamp;
-      result = system_->ProcessFrame(next_frame_++, timestamp, left, right_image);
+      result = system_->ProcessFrame(next_frame_, timestamp, left, right_image);
+      ++next_frame_;
     }
     py::dict d;
     d["state"] = std::string(ToString(result.state));
@@ -238,7 +231,6 @@ class PySystem {
   // One caller at a time: Python threads may share a system, SlamSystem's calls may not overlap.
   mutable std::mutex mutex_;
   std::uint64_t next_frame_ = 0;
-  std::optional<double> last_timestamp_;
 };
 
 }  // namespace

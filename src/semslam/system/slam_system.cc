@@ -306,6 +306,13 @@ void SlamSystem::SaveMap(const std::filesystem::path& path, const MapFileContent
 TrackingResult SlamSystem::ProcessFrame(std::uint64_t frame_id, double timestamp, const cv::Mat& left,
                                         const cv::Mat& right, const cv::Mat& mask, const cv::Mat& color) {
   Require(!finished_, "ProcessFrame after Finish");
+  // Keyframe gaps and the pacing are measured in these stamps: they must be seconds, increasing.
+  Require(std::isfinite(timestamp), fmt::format("frame {}: the timestamp is not finite", frame_id));
+  if (last_timestamp_ && !(timestamp > *last_timestamp_)) {
+    throw InvalidArgument(fmt::format("frame {}: timestamp {} does not follow the last frame's ({})",
+                                      frame_id, timestamp, *last_timestamp_));
+  }
+  last_timestamp_ = timestamp;
   if (options_.pacing == Pacing::kRealtime) {
     pacer_.Wait(timestamp);  // no faster than the camera recorded
     const double slack_s = pacer_.SlackSeconds(options_.realtime_wait_for_mapping_frames);

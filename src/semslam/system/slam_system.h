@@ -231,6 +231,7 @@ class SlamSystem {
   std::unique_ptr<Tracker> tracker_;
   size_t frames_ = 0;
   size_t tracked_ = 0;
+  std::optional<double> last_timestamp_;  // of the last frame processed
   size_t resets_ = 0;
   RealtimePacer pacer_;
   bool finished_ = false;
