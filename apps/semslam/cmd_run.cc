@@ -28,6 +28,7 @@ struct RunArgs : CameraAndOutputArgs {
   std::string vocabulary;
   std::string segmenter = "none";
   std::uint64_t seed = 0;
+  double camera_height = RoadScaleOptions{}.camera_height_m;
   bool exclude_dynamic = false;
   std::string gps;
   std::string landmarks;
@@ -61,6 +62,7 @@ void Run(const RunArgs& args) {
         Eigen::Vector3d(args.gps_lever_arm[0], args.gps_lever_arm[1], args.gps_lever_arm[2]);
   }
   options.seed = args.seed;
+  options.camera_height_m = args.camera_height;
   if (!args.frames.empty()) ParseFrameRange(args.frames, &options.first_frame, &options.end_frame);
   options.map_in = args.map_in;
   options.show_progress = !args.quiet && !Quiet();
@@ -122,6 +124,12 @@ void AddRunCommand(CLI::App& app) {
       "--no-gps-fusion", args->no_gps_fusion,
       "Tie the map to GPS with one robust similarity (the paper's method) instead of the pose-graph fusion");
   cmd->add_option("--seed", args->seed, "Seed of noisy segmenters")->capture_default_str();
+  cmd->add_option(
+         "--camera-height", args->camera_height,
+         "The camera's height above the road, metres: a monocular run without --gps scales its objects "
+         "by it (needs a segmenter)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_flag("--localization-only", args->localization_only,
                 "Track against --map-in without changing it (no new keyframes or points)");
   cmd->add_option(

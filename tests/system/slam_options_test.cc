@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 
 #include "semslam/core/error.h"
 #include "semslam/system/sequence_runner.h"
@@ -106,6 +107,20 @@ TEST(RunOptions, FlagsThatNeedAnotherAreRefused) {
   EXPECT_NO_THROW(options.Check());
   options.slam.tracker.min_seconds_between_keyframes = 1.5;  // above max_seconds_between_keyframes
   EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
+// A camera height that cannot scale the objects is refused before the run, not after its last frame.
+TEST(RunOptions, CameraHeightIsAPositiveLength) {
+  RunOptions options;
+  options.sequence = "seq";
+  options.output = "out";
+  EXPECT_EQ(options.camera_height_m, 1.65);
+  for (const double bad : {0.0, -1.65, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    options.camera_height_m = bad;
+    EXPECT_THROW(options.Check(), InvalidArgument) << bad;
+  }
+  options.camera_height_m = 2.4;
+  EXPECT_NO_THROW(options.Check());
 }
 
 }  // namespace

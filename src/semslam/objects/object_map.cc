@@ -150,13 +150,19 @@ std::vector<int> Dbscan(const Points3d& points, double eps, int min_points) {
 }
 
 ObjectMap BuildObjectMap(const std::vector<LabeledPoint>& points, const ObjectMapOptions& options,
-                         const Georeference* georeference) {
+                         const Georeference* georeference, std::optional<double> road_metres_per_map_unit) {
   options.Check();
   ObjectMap map;
   map.georeferenced = georeference != nullptr;
-  map.metres_per_map_unit = georeference ? georeference->MetresPerMapUnit() : 1.0;
+  if (georeference) {
+    map.metres_per_map_unit = georeference->MetresPerMapUnit();
+    map.scale_source = "georeference";
+  } else if (road_metres_per_map_unit) {
+    map.metres_per_map_unit = *road_metres_per_map_unit;
+    map.scale_source = "road";
+  }
   Require(std::isfinite(map.metres_per_map_unit) && map.metres_per_map_unit > 0,
-          "objects: the georeference's scale must be positive");
+          "objects: the map's scale (" + map.scale_source + ") must be positive");
 
   std::array<std::vector<int>, kNumClasses> members;
   for (size_t i = 0; i < points.size(); ++i) {

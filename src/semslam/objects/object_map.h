@@ -2,9 +2,10 @@
 // The object-level map (paper §III-D): labeled map points clustered per class with DBSCAN (Ester et al. 1996)
 // over a k-d tree (nanoflann) into objects with class, centroid, extent and point count.
 //
-// Units. Points are in the SLAM map frame. Cluster radii are given in metres; with a georeference they are
-// converted to map units by its scale (a monocular map's unit is arbitrary), without one the map is taken to
-// be metric. Objects then get ENU and WGS84 centroids too.
+// Units. Points are in the SLAM map frame. Cluster radii are given in metres and converted to map units by
+// the map's scale: a georeference's, or else a monocular map's from the road beneath its camera
+// (road_scale.h); a map with neither is taken to be metric. With a georeference objects get ENU and WGS84
+// centroids too.
 
 #include <array>
 #include <cstdint>
@@ -72,6 +73,9 @@ struct ObjectMap {
   std::array<int, kNumClasses> noise_points{};      // and those that were rejected as noise
   double metres_per_map_unit = 1.0;
   bool georeferenced = false;
+  // Where metres_per_map_unit comes from: "georeference", "road" (the camera's height above the road) or
+  // "map" (the map's unit taken as a metre: a stereo map's).
+  std::string scale_source = "map";
 };
 
 // DBSCAN over the points of one class: the cluster id of each point (-1: noise). Deterministic: clusters are
@@ -79,9 +83,11 @@ struct ObjectMap {
 // first.
 std::vector<int> Dbscan(const Points3d& points, double eps, int min_points);
 
-// Clusters every enabled class. `georeference` (optional) gives the scale and the ENU/WGS84 centroids.
+// Clusters every enabled class. `georeference` (optional) gives the scale and the ENU/WGS84 centroids;
+// without one, `road_metres_per_map_unit` (optional, EstimateRoadScale) gives the scale.
 ObjectMap BuildObjectMap(const std::vector<LabeledPoint>& points, const ObjectMapOptions& options = {},
-                         const Georeference* georeference = nullptr);
+                         const Georeference* georeference = nullptr,
+                         std::optional<double> road_metres_per_map_unit = std::nullopt);
 
 // objects.json (atomic): format, version, units, per-class parameters and counts, and every object with class
 // name and trainId, centroid (map, ENU and WGS84 when georeferenced), axis-aligned box, PCA box, size in

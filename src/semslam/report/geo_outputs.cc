@@ -27,6 +27,7 @@ void GeoOptions::Check() const {
   Require(std::isfinite(osm_radius_m) && osm_radius_m > 0, "geo osm_radius_m must be positive");
   topology.Check();
   objects.Check();
+  road_scale.Check();
   plots.Check();
   Require(std::isfinite(raster_cell_m) && raster_cell_m > 0, "geo raster_cell_m must be positive");
 }
@@ -52,6 +53,10 @@ std::string GeoSummary::ToJson() const {
             {"topology_revisited_nodes", topology_revisited_nodes},
             {"objects", objects},
             {"objects_per_class", objects_per_class},
+            {"objects_metres_per_map_unit", objects_metres_per_map_unit},
+            {"objects_scale_source", objects_scale_source},
+            {"road_scale_keyframes", road_scale_keyframes},
+            {"road_scale_spread", road_scale_spread},
             {"trajectory_frames", trajectory_frames}};
   return j.dump();
 }
@@ -368,8 +373,30 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
 
   // 5. Objects.
   if (!inputs.points.empty()) {
+    std::optional<RoadScale> road_scale;
+    if (!out.georeference && inputs.monocular) {
+      std::vector<Rigid3d> keyframe_poses;
+      for (const FramePose& kf : inputs.keyframes) keyframe_poses.push_back(kf.world_from_camera);
+      road_scale = EstimateRoadScale(keyframe_poses, inputs.points, options.road_scale);
+      if (road_scale) {
+        spdlog::info(
+            "objects: a map unit is {:.3f} m, from the camera's height above the road ({:.2f} m, {:.4f} "
+            "map units over {} keyframes, spread {:.1f} %)",
+            road_scale->metres_per_map_unit, options.road_scale.camera_height_m,
+            road_scale->camera_height_map, road_scale->keyframes, 100.0 * road_scale->spread);
+        summary.road_scale_keyframes = road_scale->keyframes;
+        summary.road_scale_spread = road_scale->spread;
+      } else {
+        spdlog::warn(
+            "objects: a monocular map without GPS, and too few road points beneath its keyframes for its "
+            "scale: object radii and sizes are in map units, not metres");
+      }
+    }
     out.objects =
-        BuildObjectMap(inputs.points, options.objects, out.georeference ? &*out.georeference : nullptr);
+        BuildObjectMap(inputs.points, options.objects, out.georeference ? &*out.georeference : nullptr,
+                       road_scale ? std::optional(road_scale->metres_per_map_unit) : std::nullopt);
+    summary.objects_metres_per_map_unit = out.objects.metres_per_map_unit;
+    summary.objects_scale_source = out.objects.scale_source;
     WriteObjectsJson(out_dir / "objects.json", out.objects, options.objects);
     out.files.push_back(out_dir / "objects.json");
     summary.objects = static_cast<int>(out.objects.objects.size());

@@ -30,6 +30,7 @@
 #include "semslam/landmarks/catalogue.h"
 #include "semslam/landmarks/landmark_map.h"
 #include "semslam/objects/object_map.h"
+#include "semslam/objects/road_scale.h"
 #include "semslam/report/plots.h"
 #include "semslam/topology/topological_map.h"
 
@@ -76,6 +77,8 @@ struct GeoOptions {
   double osm_radius_m = 150.0;  // OSM catalogues: features within this distance of the trajectory
   TopologyOptions topology;
   ObjectMapOptions objects;
+  // A monocular map without a georeference: its objects' scale from the camera's height above the road.
+  RoadScaleOptions road_scale;
   bool write_plots = true;
   PlotOptions plots;
   double raster_cell_m = 2.0;
@@ -98,6 +101,12 @@ struct GeoSummary {
       topology_revisited_nodes = 0;
   int objects = 0;
   std::map<std::string, int> objects_per_class;
+  // The objects' metres per map unit and its source (ObjectMap::scale_source); for "road", the keyframes that
+  // fitted the road beneath them and the spread of their heights (RoadScale).
+  double objects_metres_per_map_unit = 1.0;
+  std::string objects_scale_source = "map";
+  int road_scale_keyframes = 0;
+  double road_scale_spread = 0.0;
   int trajectory_frames = 0;
 
   std::string ToJson() const;  // one JSON object

@@ -147,6 +147,7 @@ nlohmann::json EffectiveConfigJson(const RunOptions& options, const SlamOptions&
                                                                          options.gps_antenna_in_camera_m->z()}
                                                         : nlohmann::json(nullptr)},
       {"landmarks", Absolute(options.landmarks)},
+      {"camera_height_m", options.camera_height_m},
       {"map_in", Absolute(options.map_in)},
       {"localization_only", slam.localization_only},
       {"exclude_dynamic", slam.exclude_dynamic},

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <charconv>
+#include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <span>
@@ -40,6 +41,8 @@ void RunOptions::Check() const {
   Require(!output.empty(), "run: --out is required");
   Require(first_frame < end_frame, "run: the frame range is empty");
   Require(gps_every >= 1, "run: --gps-every must be at least 1 frame");
+  Require(std::isfinite(camera_height_m) && camera_height_m > 0,
+          "run: --camera-height must be a positive number of metres");
   Require(!slam.localization_only || !map_in.empty(),
           "run: --localization-only needs --map-in (the map to track against without changing it)");
   Require(!slam.exclude_dynamic || (segmenter != "none" && !segmenter.empty()),
@@ -394,6 +397,7 @@ RunSummary RunSequence(const RunOptions& options) {
   GeoOptions geo_options;
   geo_options.fuse = options.gps_fusion;
   geo_options.fusion.sampling.every_n_frames = options.gps_every;
+  geo_options.road_scale.camera_height_m = options.camera_height_m;
   geo_options.fusion.antenna_in_camera_m = options.gps_antenna_in_camera_m.value_or(
       sequence->GpsAntennaInCamera().value_or(Eigen::Vector3d::Zero()));
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);

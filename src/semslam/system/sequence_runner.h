@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "semslam/geometry/eigen_types.h"
+#include "semslam/objects/road_scale.h"
 #include "semslam/system/run_metadata.h"
 #include "semslam/system/slam_system.h"
 
@@ -39,6 +40,9 @@ struct RunOptions {
   // Where the GPS antenna is in the camera frame (metres); default: the sequence's calibration says (a KITTI
   // raw drive's OXTS unit), else at the camera.
   std::optional<Eigen::Vector3d> gps_antenna_in_camera_m;
+  // The camera's height above the road (metres): a monocular map without GPS takes its objects' scale from it
+  // (objects/road_scale.h).
+  double camera_height_m = RoadScaleOptions{}.camera_height_m;
   bool save_map = true;
   bool show_progress = true;
   RunProvenance provenance;  // the command line and the binary's version, for run.json
