@@ -241,6 +241,16 @@ TEST(KittiRawCalibration, Malformed) {
   EXPECT_INPUT_ERROR(ReadKittiRawRigid(dir / "calib_velo_to_cam.txt"), "'T'", "missing");
   WriteText(dir / "calib_velo_to_cam.txt", "R: 1 0 0 0 1 0 0 0 3\nT: 0 0 0\n");
   EXPECT_INPUT_ERROR(ReadKittiRawRigid(dir / "calib_velo_to_cam.txt"), "'R'", "not a rotation");
+  // Orthonormal but a mirror: x and y swapped.
+  WriteText(dir / "calib_velo_to_cam.txt", "T: 0 0 0\nR: 0 1 0 1 0 0 0 0 1\n");
+  EXPECT_INPUT_ERROR(ReadKittiRawRigid(dir / "calib_velo_to_cam.txt"), "calib_velo_to_cam.txt:2", "'R'",
+                     "reflection");
+  WriteText(dir / "calib_cam_to_cam.txt",
+            "R_rect_00: -1 0 0 0 1 0 0 0 1\n"
+            "P_rect_00: 7.2e+02 0 6.0e+02 0 0 7.2e+02 1.8e+02 0 0 0 1 0\n");
+  WriteText(dir / "calib_velo_to_cam.txt", "R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n");
+  EXPECT_INPUT_ERROR(ReadKittiRawRectifiedCameraFromVelo(dir.path(), 0), "calib_cam_to_cam.txt:1",
+                     "'R_rect_00'", "reflection");
   WriteText(dir / "calib_velo_to_cam.txt", "R 1 0 0\n");
   EXPECT_INPUT_ERROR(ReadKittiRawRigid(dir / "calib_velo_to_cam.txt"), "calib_velo_to_cam.txt:1",
                      "key: values");

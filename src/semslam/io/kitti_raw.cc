@@ -210,6 +210,20 @@ std::vector<double> KittiRawCalibFile::Get(const std::string& key, size_t count)
   return it->second;
 }
 
+Eigen::Matrix3d KittiRawCalibFile::GetRotation(const std::string& key) const {
+  const std::vector<double> r = Get(key, 9);
+  Eigen::Matrix3d rotation;
+  for (int i = 0; i < 9; ++i) rotation(i / 3, i % 3) = r[static_cast<size_t>(i)];
+  if (IsRotation(rotation)) return rotation;
+  const auto line = lines.find(key);
+  const SourceLocation where{file, line == lines.end() ? 0 : line->second};
+  if (rotation.determinant() < 0)
+    throw InputError(where, key, "is a reflection (determinant -1), not a rotation");
+  throw InputError(
+      where, key,
+      fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})", OrthonormalityDeviation(rotation)));
+}
+
 KittiRawCalibFile ReadKittiRawCalibFile(const fs::path& path) {
   TextReader reader(path);
   KittiRawCalibFile calib;
@@ -236,18 +250,11 @@ KittiRawCalibFile ReadKittiRawCalibFile(const fs::path& path) {
 
 Rigid3d ReadKittiRawRigid(const fs::path& path) {
   const KittiRawCalibFile calib = ReadKittiRawCalibFile(path);
-  const std::vector<double> r = calib.Get("R", 9);
+  const Eigen::Matrix3d rotation = calib.GetRotation("R");
   const std::vector<double> t = calib.Get("T", 3);
   Eigen::Matrix3x4d m;
-  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = r[i];
-  for (int i = 0; i < 3; ++i) m(i, 3) = t[i];
-  const Eigen::Matrix3d rotation = m.leftCols<3>();
-  if (!IsRotation(rotation)) {
-    const auto line = calib.lines.find("R");
-    throw InputError(SourceLocation{path, line->second}, "R",
-                     fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})",
-                                 OrthonormalityDeviation(rotation)));
-  }
+  m.leftCols<3>() = rotation;
+  for (int i = 0; i < 3; ++i) m(i, 3) = t[static_cast<size_t>(i)];
   return Rigid3d::FromMatrix(m);
 }
 

@@ -51,6 +51,9 @@ struct KittiRawCalibFile {
   std::map<std::string, std::vector<double>> values;
   // The numbers under `key`, requiring exactly `count` of them; throws InputError naming the file and key.
   std::vector<double> Get(const std::string& key, size_t count) const;
+  // The 9 numbers under `key` as a row-major rotation; throws InputError naming the file, line and key for a
+  // matrix that is not orthonormal or is a reflection.
+  Eigen::Matrix3d GetRotation(const std::string& key) const;
   std::filesystem::path file;
   std::map<std::string, int> lines;  // the line of each key, for error messages
 };

@@ -68,9 +68,8 @@ Rigid3d ReadKittiRawRectifiedCameraFromVelo(const fs::path& drive_dir, int camer
   const Rigid3d cam0_from_velo = ReadKittiRawRigid(FindKittiRawCalibFile(drive_dir, "calib_velo_to_cam.txt"));
   const KittiRawCalibFile cam =
       ReadKittiRawCalibFile(FindKittiRawCalibFile(drive_dir, "calib_cam_to_cam.txt"));
-  const std::vector<double> r = cam.Get("R_rect_00", 9);
   Eigen::Matrix3x4d m = Eigen::Matrix3x4d::Zero();
-  for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = r[static_cast<size_t>(i)];
+  m.leftCols<3>() = cam.GetRotation("R_rect_00");
   const Rigid3d rect_from_cam0 = Rigid3d::FromMatrix(m);
   const Rigid3d camera_from_rect(Eigen::Quaterniond::Identity(),
                                  ProjectionOffset(RectifiedProjection(cam, camera_index)));
