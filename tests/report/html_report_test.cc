@@ -474,6 +474,29 @@ TEST(HtmlReport, EscapesNamesAndLimitsTables) {
   EXPECT_NE(html.find("max_plot_bytes"), std::string::npos);
 }
 
+// Object sizes are metres only where objects.json says the map's scale is known.
+TEST(HtmlReport, ObjectSizesSayTheirUnit) {
+  const TempDir dir;
+  WriteFullRun(dir.path(), 100, 10);
+  const auto objects_section = [&](const std::string& source) {
+    nlohmann::json objects = nlohmann::json::parse(ReadText(dir / "objects.json"));
+    objects["scale_source"] = source;
+    objects["metres_per_map_unit"] = source == "road" ? 19.6 : 1.0;
+    WriteFileAtomically(dir / "objects.json", objects.dump());
+    return Between(ReadText(WriteHtmlReport(dir.path()).path), "<section id=\"objects\">", "</section>");
+  };
+  std::string section = objects_section("road");
+  EXPECT_NE(section.find("a map unit is 19.60 m, from the camera's height above the road"), std::string::npos)
+      << section;
+  EXPECT_NE(section.find("size (m)"), std::string::npos);
+  section = objects_section("map");
+  EXPECT_NE(section.find("Sizes in map units"), std::string::npos) << section;
+  EXPECT_NE(section.find("size (map units)"), std::string::npos);
+  section = objects_section("georeference");
+  EXPECT_NE(section.find("Sizes in metres, by the GPS"), std::string::npos) << section;
+  EXPECT_NE(section.find("size (m)"), std::string::npos);
+}
+
 TEST(HtmlReport, OptionsAreChecked) {
   HtmlReportOptions options;
   EXPECT_NO_THROW(options.Check());

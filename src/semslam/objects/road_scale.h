@@ -6,8 +6,8 @@
 //
 // Per keyframe, a plane is fitted (RANSAC, then least squares) to the road points nearest the camera ahead of
 // and below it; its distance from the camera centre is the camera's height there. The map's height is the
-// median over the keyframes that fit one, so a drifting scale gives its mean and mislabelled points its
-// outliers.
+// median over the keyframes that fit one: a drifting scale gives its median along the drive, and keyframes
+// whose fit mislabelled points spoilt fall outside the middle.
 
 #include <optional>
 #include <vector>
@@ -23,8 +23,8 @@ struct RoadScaleOptions {
   double camera_height_m = 1.65;
   int nearest_points = 60;  // road points nearest the camera one keyframe fits its plane to
   int min_inliers = 20;     // of those, within the RANSAC's distance of the plane
-  double inlier_share =
-      0.05;  // that distance, a share of the camera's height (the points' median depth below it)
+  // That distance, a share of the camera's height (the nearest points' median depth below it).
+  double inlier_share = 0.05;
   double max_tilt_deg = 15.0;   // between the plane's normal and the camera's down axis
   int min_keyframes = 5;        // keyframes with a plane, for a scale
   int ransac_iterations = 100;  // plane hypotheses per keyframe

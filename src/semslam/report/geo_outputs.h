@@ -126,7 +126,8 @@ struct GeoOutputs {
 };
 
 // Throws InputError for unreadable GPS logs or catalogues, InvalidArgument for bad options or inputs. Missing
-// GPS is not an error: only objects (metric radii taken as map units) and the semantic map plot are written.
+// GPS is not an error: only objects (a monocular map's scale from the road beneath its camera, else its
+// metric radii taken as map units) and the semantic map plot are written.
 GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const std::filesystem::path& out_dir,
                            const GeoOptions& options = {});
 

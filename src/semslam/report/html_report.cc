@@ -82,9 +82,22 @@ void AppendObjects(Page& page, const ReportInputs& in, const HtmlReportOptions& 
   for (const auto& [name, n] : per_class) {
     counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", n, HtmlEscape(name));
   }
+  // Sizes are metres only where the map's scale is known (objects_json.cc).
+  const bool map_units = in.objects_scale_source == "map";
+  std::string scale;
+  if (in.objects_scale_source == "georeference") {
+    scale = " Sizes in metres, by the GPS.";
+  } else if (in.objects_scale_source == "road" && in.objects_metres_per_map_unit) {
+    scale = fmt::format(" Sizes in metres: a map unit is {} m, from the camera's height above the road.",
+                        FormatNumber(*in.objects_metres_per_map_unit, 2));
+  } else if (map_units) {
+    scale =
+        " Sizes in map units: metres for a stereo map; a monocular map without GPS or road labels has no "
+        "scale.";
+  }
   page.body += fmt::format(
-      "<p>From <code>objects.json</code>: labeled map points clustered per class. {} objects{}{}.</p>\n",
-      GroupThousands(in.objects_total), counts.empty() ? "" : ": ", counts);
+      "<p>From <code>objects.json</code>: labeled map points clustered per class. {} objects{}{}.{}</p>\n",
+      GroupThousands(in.objects_total), counts.empty() ? "" : ": ", counts, scale);
   if (in.objects->empty()) {
     page.Close();
     return;
@@ -94,9 +107,9 @@ void AppendObjects(Page& page, const ReportInputs& in, const HtmlReportOptions& 
   page.body += fmt::format(
       "<table class=\"data sortable\" id=\"object-table\">\n<thead><tr><th "
       "class=\"num\">id</th><th>class</th>"
-      "<th class=\"num\">points</th><th>size (m)</th><th>centroid ({})</th><th class=\"num\">lat</th>"
+      "<th class=\"num\">points</th><th>size ({})</th><th>centroid ({})</th><th class=\"num\">lat</th>"
       "<th class=\"num\">lon</th><th class=\"num\">confidence</th></tr></thead>\n<tbody>\n",
-      enu ? "ENU, m" : "map frame");
+      map_units ? "map units" : "m", enu ? "ENU, m" : "map frame");
   const std::size_t rows = std::min(in.objects->size(), options.max_table_rows);
   for (std::size_t i = 0; i < rows; ++i) {
     const ObjectRow& row = (*in.objects)[i];

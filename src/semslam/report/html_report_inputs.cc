@@ -92,9 +92,11 @@ std::vector<LandmarkRow> ReadLandmarks(const fs::path& file) {
   return rows;
 }
 
-std::vector<ObjectRow> ReadObjects(const fs::path& file, long long* total) {
+std::vector<ObjectRow> ReadObjects(const fs::path& file, ReportInputs& in) {
   const json root = ParseJsonFile(file);
   const JsonFields f(file);
+  in.objects_scale_source = f.String(root, "scale_source", "scale_source").value_or("");
+  in.objects_metres_per_map_unit = f.Number(root, "metres_per_map_unit", "metres_per_map_unit");
   const json* objects = f.Array(root, "objects", "objects");
   if (objects == nullptr) f.Fail("objects", "missing");
   std::vector<ObjectRow> rows;
@@ -115,7 +117,7 @@ std::vector<ObjectRow> ReadObjects(const fs::path& file, long long* total) {
     }
     rows.push_back(std::move(row));
   }
-  *total = static_cast<long long>(rows.size());
+  in.objects_total = static_cast<long long>(rows.size());
   return rows;
 }
 
@@ -241,7 +243,7 @@ ReportInputs ReadInputs(const fs::path& run_dir, const HtmlReportOptions& option
     in.enu_from_map = Sim3d(*scale, quaternion.normalized(), *translation);
   }
   if (const fs::path file = run_dir / "objects.json"; Exists(file)) {
-    in.objects = ReadObjects(file, &in.objects_total);
+    in.objects = ReadObjects(file, in);
   }
   if (options.embed_plots) {
     for (const fs::path& file : PlotFiles(run_dir / "plots")) {

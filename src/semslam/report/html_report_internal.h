@@ -136,6 +136,10 @@ struct ReportInputs {
   std::optional<std::vector<LandmarkRow>> landmarks;
   std::optional<std::vector<ObjectRow>> objects;
   long long objects_total = 0;
+  // objects.json's scale: `scale_source` (georeference, road or map; empty in files before it) and
+  // `metres_per_map_unit`.
+  std::string objects_scale_source;
+  std::optional<double> objects_metres_per_map_unit;
   std::vector<PlotImage> plots;
   std::vector<std::string> notes;
   std::optional<Sim3d> enu_from_map;  // georeference.json: the 3D view is then ENU, north up, metres
