@@ -96,6 +96,10 @@ TEST(IsRotation, RoundingPassesScaleAndReflectionDoNot) {
   EXPECT_NEAR(OrthonormalityDeviation(2.0 * r), 3.0, 1e-9);
   EXPECT_FALSE(IsRotation(-r));  // orthonormal, determinant -1
   EXPECT_FALSE(IsRotation(Eigen::Matrix3d::Zero()));
+  // What an error message says of each.
+  EXPECT_FALSE(RotationDefect(rounded).has_value());
+  EXPECT_EQ(RotationDefect(2.0 * r).value_or(""), "not orthonormal (largest |R^T R - I| entry 3)");
+  EXPECT_EQ(RotationDefect(-r).value_or(""), "a reflection (determinant -1)");
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "semslam/geometry/rigid3.h"
 
+#include <fmt/format.h>
+
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -88,6 +90,14 @@ double OrthonormalityDeviation(const Eigen::Matrix3d& r) {
 
 bool IsRotation(const Eigen::Matrix3d& r, double tolerance) {
   return OrthonormalityDeviation(r) <= tolerance && r.determinant() > 0.0;
+}
+
+std::optional<std::string> RotationDefect(const Eigen::Matrix3d& r, double tolerance) {
+  const double deviation = OrthonormalityDeviation(r);
+  if (!(deviation <= tolerance))
+    return fmt::format("not orthonormal (largest |R^T R - I| entry {:.3g})", deviation);
+  if (!(r.determinant() > 0.0)) return std::string("a reflection (determinant -1)");
+  return std::nullopt;
 }
 
 Eigen::Matrix3d SkewSymmetric(const Eigen::Vector3d& v) {

@@ -2,6 +2,9 @@
 // Rigid transforms in 3D (SE(3)). Named for the frames they map between: `world_from_camera` maps
 // points from the camera frame into the world frame, so camera centres are world_from_camera.translation.
 
+#include <optional>
+#include <string>
+
 #include "semslam/geometry/eigen_types.h"
 
 namespace semslam {
@@ -37,6 +40,9 @@ double OrthonormalityDeviation(const Eigen::Matrix3d& r);
 // files carry rounding, which FromMatrix removes) and not a reflection.
 inline constexpr double kRotationTolerance = 1e-2;
 bool IsRotation(const Eigen::Matrix3d& r, double tolerance = kRotationTolerance);
+// Why `r` is not a rotation, for an error message ("not orthonormal (...)" or "a reflection (...)"); empty
+// when IsRotation(r, tolerance).
+std::optional<std::string> RotationDefect(const Eigen::Matrix3d& r, double tolerance = kRotationTolerance);
 
 // SO(3) helpers on rotation vectors.
 Eigen::Matrix3d SkewSymmetric(const Eigen::Vector3d& v);

@@ -214,14 +214,11 @@ Eigen::Matrix3d KittiRawCalibFile::GetRotation(const std::string& key) const {
   const std::vector<double> r = Get(key, 9);
   Eigen::Matrix3d rotation;
   for (int i = 0; i < 9; ++i) rotation(i / 3, i % 3) = r[static_cast<size_t>(i)];
-  if (IsRotation(rotation)) return rotation;
+  const std::optional<std::string> defect = RotationDefect(rotation);
+  if (!defect) return rotation;
   const auto line = lines.find(key);
-  const SourceLocation where{file, line == lines.end() ? 0 : line->second};
-  if (rotation.determinant() < 0)
-    throw InputError(where, key, "is a reflection (determinant -1), not a rotation");
-  throw InputError(
-      where, key,
-      fmt::format("is not a rotation (largest |R^T R - I| entry {:.3g})", OrthonormalityDeviation(rotation)));
+  throw InputError(SourceLocation{file, line == lines.end() ? 0 : line->second}, key,
+                   "is not a rotation: " + *defect);
 }
 
 KittiRawCalibFile ReadKittiRawCalibFile(const fs::path& path) {

@@ -49,14 +49,8 @@ Rigid3d ParseKittiPose(const std::vector<std::string_view>& tokens, const Source
   RequireColumns(tokens, 12, where, "KITTI pose: row-major 3x4 [R|t]");
   Eigen::Matrix3x4d m;
   for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = ParseDouble(tokens[i], where, kKittiFields[i]);
-  const Eigen::Matrix3d r = m.leftCols<3>();
-  const double deviation = OrthonormalityDeviation(r);
-  if (deviation > kRotationTolerance) {
-    throw InputError(
-        where, "r00..r22",
-        fmt::format("rotation is not orthonormal (largest |R^T R - I| entry {:.3g})", deviation));
-  }
-  if (r.determinant() < 0) throw InputError(where, "r00..r22", "rotation has determinant -1 (a reflection)");
+  if (const auto defect = RotationDefect(m.leftCols<3>()))
+    throw InputError(where, "r00..r22", "rotation is " + *defect);
   return Rigid3d::FromMatrix(m);
 }
 

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include "semslam/core/error.h"
 
@@ -118,15 +119,15 @@ std::optional<RoadScale> EstimateRoadScale(const std::vector<Rigid3d>& world_fro
     if (p.label == kRoad && p.position.allFinite()) road.push_back(p.position);
   }
   std::vector<double> heights;
-  std::vector<Eigen::Vector3d> below;  // road points ahead of and below one camera, in its frame
   for (size_t index = 0; index < world_from_camera.size(); ++index) {
     const Rigid3d camera_from_world = world_from_camera[index].Inverse();
-    below.clear();
+    std::vector<Eigen::Vector3d> below;  // road points ahead of and below the camera, in its frame
     for (const Eigen::Vector3d& p : road) {
       const Eigen::Vector3d in_camera = camera_from_world * p;
       if (in_camera.z() > 0 && in_camera.y() > 0) below.push_back(in_camera);
     }
-    const std::optional<double> height = HeightAboveRoad(below, options, static_cast<std::uint32_t>(index));
+    const std::optional<double> height =
+        HeightAboveRoad(std::move(below), options, static_cast<std::uint32_t>(index));
     if (height) heights.push_back(*height);
   }
   if (heights.size() < static_cast<size_t>(options.min_keyframes)) return std::nullopt;
