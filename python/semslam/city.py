@@ -373,7 +373,8 @@ def write_city_json(out: str, drives: List[Drive], results: Dict[str, dict], cit
     for d in drives:
         r = results.get(f"drive {d.name}", {})
         doc["drives"].append({"name": d.name, "sequence": d.sequence, "gps": d.gps, "landmarks": d.landmarks,
-                              "gps_lever_arm": d.gps_lever_arm, "run": f"drives/{d.name}", "frames": r.get("frames"),
+                              "gps_lever_arm": d.gps_lever_arm, "camera_height_m": d.camera_height_m,
+                              "run": f"drives/{d.name}", "frames": r.get("frames"),
                               "ate_rmse": r.get("ate_rmse"), "seconds": r.get("seconds")})
     path = os.path.join(out, CITY_JSON)
     tmp = f"{path}.tmp-{os.getpid()}"

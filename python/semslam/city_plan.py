@@ -20,6 +20,7 @@ class Drive:
     gps: Optional[str] = None          # absolute, or None: no GPS
     landmarks: Optional[str] = None    # absolute, or None: no catalogue
     gps_lever_arm: Optional[List[float]] = None  # X,Y,Z metres in the camera frame
+    camera_height_m: Optional[float] = None  # above the road; None: semslam run's default
     named_by_hand: bool = False  # the manifest gave the name: it is kept when names clash
     origin: str = ""  # where it was given, for messages: "--drives[1]", "FILE: drives[0]"
 
@@ -32,6 +33,8 @@ class Drive:
             args += ["--landmarks", self.landmarks]
         if self.gps_lever_arm is not None:
             args += ["--gps-lever-arm", ",".join(repr(float(v)) for v in self.gps_lever_arm)]
+        if self.camera_height_m is not None:
+            args += ["--camera-height", repr(float(self.camera_height_m))]
         return args
 
 
@@ -156,8 +159,8 @@ def _manifest_path(value, key: str, index: int, manifest: str, base: str) -> Opt
 
 def read_manifest(path: str) -> List[Drive]:
     """Drives from a manifest (docs/formats.md, "City manifest"): {"drives": [{"sequence", "name"?, "gps"?,
-    "landmarks"?, "gps_lever_arm"?}, ...]}. Relative paths are relative to the manifest's folder; a key left out is
-    found as for --drives (discover_drive), a key set to null means none."""
+    "landmarks"?, "gps_lever_arm"?, "camera_height_m"?}, ...]}. Relative paths are relative to the manifest's
+    folder; a key left out is found as for --drives (discover_drive), a key set to null means none."""
     path = os.path.abspath(path)
     try:
         with open(path, encoding="utf-8") as f:
@@ -175,7 +178,7 @@ def read_manifest(path: str) -> List[Drive]:
     if not isinstance(doc, dict) or not isinstance(doc.get("drives"), list) or not doc["drives"]:
         raise CityInputError(f"{path}: expected an object with a non-empty list \"drives\"")
     base = os.path.dirname(path)
-    known = {"name", "sequence", "gps", "landmarks", "gps_lever_arm"}
+    known = {"name", "sequence", "gps", "landmarks", "gps_lever_arm", "camera_height_m"}
     drives = []
     for i, entry in enumerate(doc["drives"]):
         if not isinstance(entry, dict):
@@ -208,6 +211,13 @@ def read_manifest(path: str) -> List[Drive]:
                 raise CityInputError(f"{path}: drives[{i}].gps_lever_arm: expected [x, y, z], three finite "
                                      f"numbers (metres, camera frame), got {json.dumps(arm)}")
             drive.gps_lever_arm = [float(v) for v in arm]
+        if entry.get("camera_height_m") is not None:
+            height = entry["camera_height_m"]
+            if (not isinstance(height, (int, float)) or isinstance(height, bool) or not math.isfinite(height) or
+                    height <= 0):
+                raise CityInputError(f"{path}: drives[{i}].camera_height_m: expected a positive number (metres "
+                                     f"above the road), got {json.dumps(height)}")
+            drive.camera_height_m = float(height)
         drives.append(drive)
     return drives
 

@@ -98,14 +98,16 @@ class CityPlanTest(unittest.TestCase):
         touch(self.path("gps", "b.csv"), "t,lat,lon\n")
         manifest = self.write_manifest({"drives": [
             {"sequence": "a/sequences/00", "name": "north", "gps": None},
-            {"sequence": self.path("b"), "gps": "gps/b.csv", "landmarks": None, "gps_lever_arm": [0, -1.5, 0.25]},
+            {"sequence": self.path("b"), "gps": "gps/b.csv", "landmarks": None, "gps_lever_arm": [0, -1.5, 0.25],
+             "camera_height_m": 1.2},
         ]})
         a, b = read_manifest(manifest)
         self.assertEqual((a.name, a.sequence, a.gps, a.landmarks, a.named_by_hand),
                          ("north", self.path("a", "sequences", "00"), None, self.path("a", "landmarks.csv"), True))
         self.assertEqual((b.name, b.gps, b.landmarks, b.gps_lever_arm, b.named_by_hand),
                          ("b", self.path("gps", "b.csv"), None, [0.0, -1.5, 0.25], False))
-        self.assertEqual(b.run_args()[-2:], ["--gps-lever-arm", "0.0,-1.5,0.25"])
+        self.assertEqual(b.run_args()[-4:], ["--gps-lever-arm", "0.0,-1.5,0.25", "--camera-height", "1.2"])
+        self.assertNotIn("--camera-height", a.run_args())
 
     def test_bad_manifests_name_the_file_and_field(self):
         synthetic_city(self.path("a"))
@@ -122,6 +124,8 @@ class CityPlanTest(unittest.TestCase):
             ({"drives": [{"sequence": "a", "gps_lever_arm": [1, 2]}]}, r"gps_lever_arm: expected \[x, y, z\]"),
             ({"drives": [{"sequence": "a", "gps_lever_arm": [1, 2, "3"]}]}, r"gps_lever_arm"),
             ({"drives": [{"sequence": "a", "name": "../up"}]}, r"drives\[0\]\.name: expected letters"),
+            ({"drives": [{"sequence": "a", "camera_height_m": 0}]}, r"drives\[0\]\.camera_height_m: expected a"),
+            ({"drives": [{"sequence": "a", "camera_height_m": "1.65"}]}, r"camera_height_m"),
         ]
         for doc, message in cases:
             with self.subTest(doc=doc):

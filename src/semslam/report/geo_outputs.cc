@@ -27,7 +27,7 @@ void GeoOptions::Check() const {
   Require(std::isfinite(osm_radius_m) && osm_radius_m > 0, "geo osm_radius_m must be positive");
   topology.Check();
   objects.Check();
-  road_scale.Check();
+  if (road_scale) road_scale->Check();
   plots.Check();
   Require(std::isfinite(raster_cell_m) && raster_cell_m > 0, "geo raster_cell_m must be positive");
 }
@@ -374,15 +374,15 @@ GeoOutputs WriteGeoOutputs(const GeoInputs& inputs, const fs::path& out_dir, con
   // 5. Objects.
   if (!inputs.points.empty()) {
     std::optional<RoadScale> road_scale;
-    if (!out.georeference && inputs.monocular) {
+    if (!out.georeference && inputs.monocular && options.road_scale) {
       std::vector<Rigid3d> keyframe_poses;
       for (const FramePose& kf : inputs.keyframes) keyframe_poses.push_back(kf.world_from_camera);
-      road_scale = EstimateRoadScale(keyframe_poses, inputs.points, options.road_scale);
+      road_scale = EstimateRoadScale(keyframe_poses, inputs.points, *options.road_scale);
       if (road_scale) {
         spdlog::info(
             "objects: a map unit is {:.3f} m, from the camera's height above the road ({:.2f} m, {:.4f} "
             "map units over {} keyframes, spread {:.1f} %)",
-            road_scale->metres_per_map_unit, options.road_scale.camera_height_m,
+            road_scale->metres_per_map_unit, options.road_scale->camera_height_m,
             road_scale->camera_height_map, road_scale->keyframes, 100.0 * road_scale->spread);
         summary.road_scale_keyframes = road_scale->keyframes;
         summary.road_scale_spread = road_scale->spread;

@@ -77,8 +77,9 @@ struct GeoOptions {
   double osm_radius_m = 150.0;  // OSM catalogues: features within this distance of the trajectory
   TopologyOptions topology;
   ObjectMapOptions objects;
-  // A monocular map without a georeference: its objects' scale from the camera's height above the road.
-  RoadScaleOptions road_scale;
+  // A monocular map without a georeference: its objects' scale from the camera's height above the road; none:
+  // its objects stay in map units (a merge of drives whose cameras rode at different heights).
+  std::optional<RoadScaleOptions> road_scale = RoadScaleOptions{};
   bool write_plots = true;
   PlotOptions plots;
   double raster_cell_m = 2.0;

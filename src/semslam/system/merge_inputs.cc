@@ -27,6 +27,14 @@ std::optional<Eigen::Vector3d> LeverArmOf(const nlohmann::json& j) {
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
+double CameraHeightOf(const nlohmann::json& j) {
+  const double height = j.value("camera_height_m", RoadScaleOptions{}.camera_height_m);
+  if (!std::isfinite(height) || height <= 0)
+    throw nlohmann::json::other_error::create(501, "camera_height_m: a positive number of metres expected",
+                                              nullptr);
+  return height;
+}
+
 }  // namespace
 
 InputRun ReadInputRun(const fs::path& dir) {
@@ -50,7 +58,8 @@ InputRun ReadInputRun(const fs::path& dir) {
                                                          run.dir / s.at("frames_csv").get<std::string>(),
                                                          s.value("gps", std::string()),
                                                          s.value("gps_every", 30),
-                                                         LeverArmOf(s)};
+                                                         LeverArmOf(s),
+                                                         CameraHeightOf(s)};
       }
     } else {
       const std::string landmarks = j.at("config").value("landmarks", std::string());
@@ -63,7 +72,8 @@ InputRun ReadInputRun(const fs::path& dir) {
                                       run.dir / "frames.csv",
                                       config.value("gps", std::string()),
                                       config.value("gps_every", 30),
-                                      LeverArmOf(config)};
+                                      LeverArmOf(config),
+                                      CameraHeightOf(config)};
       }
     }
   } catch (const nlohmann::json::exception& e) {

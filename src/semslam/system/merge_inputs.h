@@ -14,6 +14,7 @@
 #include "semslam/geo/wgs84.h"
 #include "semslam/geometry/trajectory.h"
 #include "semslam/landmarks/catalogue.h"
+#include "semslam/objects/road_scale.h"
 #include "semslam/report/geo_evaluation.h"
 
 namespace semslam {
@@ -28,6 +29,9 @@ struct InputSession {
   std::string gps;
   int gps_every = 30;
   std::optional<Eigen::Vector3d> lever_arm;
+  // The camera's height above the road its run was given (`run --camera-height`; runs that did not record it
+  // had the default).
+  double camera_height_m = RoadScaleOptions{}.camera_height_m;
 };
 
 // One run folder given to merge: a run's (its own drive is its map file's last session) or a merge's.

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cctype>
 #include <map>
+#include <set>
 #include <string>
 
 #include "semslam/core/atomic_file.h"
@@ -108,6 +110,7 @@ nlohmann::json WriteSession(const Map& map, SessionRecord& s, size_t k, const Me
     if (s.input->lever_arm) {
       j["gps_lever_arm"] = {s.input->lever_arm->x(), s.input->lever_arm->y(), s.input->lever_arm->z()};
     }
+    j["camera_height_m"] = s.input->camera_height_m;
   }
   const Trajectory trajectory = ToTrajectory(s.frames, main_map);
   WriteTumTrajectory(options.folder / folder / "trajectory.tum", trajectory);
@@ -174,6 +177,29 @@ std::optional<double> CityAte(const CityTruth& city, Alignment alignment, nlohma
   }
 }
 
+// How the objects of a monocular map without GPS get their scale: from the camera's height above the road the
+// drives' runs were given, when they agree. Cameras at different heights would need a height per keyframe;
+// the objects then stay in map units.
+std::optional<RoadScaleOptions> RoadScaleOfDrives(const std::vector<SessionRecord>& sessions,
+                                                  std::uint32_t map_id) {
+  std::set<double> heights;
+  for (const SessionRecord& s : sessions) {
+    const bool in_map =
+        std::any_of(s.frames.begin(), s.frames.end(), [&](const FramePose& f) { return f.map_id == map_id; });
+    if (s.input && in_map) heights.insert(s.input->camera_height_m);
+  }
+  RoadScaleOptions options;
+  if (heights.size() <= 1) {
+    if (!heights.empty()) options.camera_height_m = *heights.begin();
+    return options;
+  }
+  spdlog::warn(
+      "objects: the drives' cameras rode at different heights above the road ({:.2f} to {:.2f} m): "
+      "object radii and sizes are in map units, not metres",
+      *heights.begin(), *heights.rbegin());
+  return std::nullopt;
+}
+
 }  // namespace
 
 MergeOutputs WriteMergeOutputs(const Map& map, std::vector<SessionRecord>& sessions,
@@ -210,7 +236,9 @@ MergeOutputs WriteMergeOutputs(const Map& map, std::vector<SessionRecord>& sessi
     geo.placed = std::move(placed);
     if (!options.catalogues.empty()) geo.landmarks = UnionOfCatalogues(options.catalogues);
   }
-  out.geo = WriteGeoOutputs(geo, options.folder, {});
+  GeoOptions geo_options;
+  if (geo.monocular && !georeference) geo_options.road_scale = RoadScaleOfDrives(sessions, options.main_map);
+  out.geo = WriteGeoOutputs(geo, options.folder, geo_options);
   if (georeference && city.town_enu && !out.geo.landmarks.empty()) {
     std::vector<SceneTruth::Landmark> truth_landmarks;
     for (const auto& [name, landmark] : city.town_landmarks) truth_landmarks.push_back(landmark);

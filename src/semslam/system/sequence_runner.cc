@@ -397,7 +397,7 @@ RunSummary RunSequence(const RunOptions& options) {
   GeoOptions geo_options;
   geo_options.fuse = options.gps_fusion;
   geo_options.fusion.sampling.every_n_frames = options.gps_every;
-  geo_options.road_scale.camera_height_m = options.camera_height_m;
+  geo_options.road_scale->camera_height_m = options.camera_height_m;
   geo_options.fusion.antenna_in_camera_m = options.gps_antenna_in_camera_m.value_or(
       sequence->GpsAntennaInCamera().value_or(Eigen::Vector3d::Zero()));
   const GeoOutputs geo_outputs = WriteGeoOutputs(geo, options.output, geo_options);
