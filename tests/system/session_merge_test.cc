@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <fstream>
 #include <string>
-#include <utility>
 
 #include "semslam/map/map.h"
 #include "semslam/map/map_file.h"
@@ -146,31 +145,6 @@ TEST(SessionMerge, TwoCamerasOfARealDriveBecomeOneMap) {
     EXPECT_LE(s["ate_rmse_city"].get<double>(), 1.05 * own) << s["name"];
     EXPECT_EQ(s["camera_height_m"].get<double>(), 1.65) << s["name"];
   }
-
-  // Without GPS, the merged map's objects are scaled by the road beneath the cameras, at the height the runs
-  // were given: the same map told another height scales by their ratio; drives told different heights leave
-  // the objects in map units.
-  const nlohmann::json geo = run["geo"];
-  ASSERT_EQ(geo["objects_scale_source"], "road") << geo;
-  const auto merge_at = [&](double colour_height, double grey_height) {
-    for (const auto& [camera, height] :
-         {std::pair{"image_02", colour_height}, std::pair{"image_00", grey_height}}) {
-      nlohmann::json j = ReadJson(dir / camera / "run.json");
-      j["config"]["camera_height_m"] = height;
-      std::ofstream(dir / camera / "run.json") << j.dump(2);
-    }
-    const CommandResult again =
-        RunSemslam({"merge", "--maps", (dir / "image_02").string(), (dir / "image_00").string(), "--out",
-                    (dir / "merged").string(), "--overwrite", "-q"});
-    EXPECT_TRUE(again.Succeeded()) << again.Describe();
-    return ReadJson(dir / "merged" / "run.json")["geo"];
-  };
-  const nlohmann::json lower = merge_at(1.2, 1.2);
-  EXPECT_EQ(lower["objects_scale_source"], "road");
-  EXPECT_NEAR(lower["objects_metres_per_map_unit"].get<double>(),
-              geo["objects_metres_per_map_unit"].get<double>() * 1.2 / 1.65,
-              1e-9 * geo["objects_metres_per_map_unit"].get<double>());
-  EXPECT_EQ(merge_at(1.2, 1.65)["objects_scale_source"], "map");
 }
 
 TEST(SessionMerge, AMergedMapMergesAgainAsARunDoes) {
