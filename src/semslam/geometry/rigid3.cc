@@ -88,10 +88,6 @@ double OrthonormalityDeviation(const Eigen::Matrix3d& r) {
   return (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
 }
 
-bool IsRotation(const Eigen::Matrix3d& r, double tolerance) {
-  return OrthonormalityDeviation(r) <= tolerance && r.determinant() > 0.0;
-}
-
 std::optional<std::string> RotationDefect(const Eigen::Matrix3d& r, double tolerance) {
   const double deviation = OrthonormalityDeviation(r);
   if (!(deviation <= tolerance))
@@ -99,6 +95,8 @@ std::optional<std::string> RotationDefect(const Eigen::Matrix3d& r, double toler
   if (!(r.determinant() > 0.0)) return std::string("a reflection (determinant -1)");
   return std::nullopt;
 }
+
+bool IsRotation(const Eigen::Matrix3d& r, double tolerance) { return !RotationDefect(r, tolerance); }
 
 Eigen::Matrix3d SkewSymmetric(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
